@@ -1,0 +1,8 @@
+// Factory of the basic-traversal backend.
+#pragma once
+
+#include "rtcd/cpu_pipeline.hpp"
+
+namespace rtcd {
+std::unique_ptr<NarrowPhase> make_basic_narrow_phase(const Config& config);
+}

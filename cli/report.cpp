@@ -1,0 +1,91 @@
+// JSON and table output of a query step.
+#include "report.hpp"
+
+#include <cstdio>
+
+namespace rtcd::cli {
+namespace {
+
+nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+nlohmann::json record(const RayRecord& r) {
+  return {{"source", r.source == Side::a ? "a" : "b"},
+          {"vertex", r.vertex},
+          {"triangle", r.triangle},
+          {"origin", vec(r.origin)},
+          {"direction", vec(r.direction)},
+          {"normal", vec(r.normal)}};
+}
+
+nlohmann::json stats_json(const StepStats& s) {
+  nlohmann::json endings;
+  for (int i = 0; i < RTCD_LINE_STATUS_COUNT; ++i) endings[line_status_name(i)] = s.walk_endings[i];
+  return {{"pairs_full", s.pairs_full},
+          {"pairs_iterative", s.pairs_iterative},
+          {"fallbacks_to_full", s.fallbacks_to_full},
+          {"candidates", s.candidates},
+          {"rays_full", s.rays_full},
+          {"rays_predictive", s.rays_predictive},
+          {"rays_iterative", s.rays_iterative},
+          {"walk_steps", s.walk_steps},
+          {"walk_endings", endings},
+          {"seconds", {{"prepare", s.seconds_prepare},
+                       {"full", s.seconds_full},
+                       {"iterative", s.seconds_iterative},
+                       {"gather", s.seconds_gather}}}};
+}
+
+}  // namespace
+
+nlohmann::json to_json(const StepResult& step) {
+  const PairResult& pair = step.pairs.at(0);
+  nlohmann::json contacts = nlohmann::json::array(), predictive = nlohmann::json::array();
+  for (const Contact& c : step.contacts_of(pair)) {
+    nlohmann::json j = record(c);
+    j["depth"] = c.depth;
+    j["projected_depth"] = c.projected_depth;
+    contacts.push_back(j);
+  }
+  for (const PredictiveRay& p : step.predictive_of(pair)) {
+    nlohmann::json j = record(p);
+    j["distance"] = p.distance;
+    predictive.push_back(j);
+  }
+  return {{"colliding", pair.colliding},
+          {"mode", to_string(pair.mode)},
+          {"max_depth", pair.max_depth},
+          {"contacts", contacts},
+          {"predictive", predictive},
+          {"stats", stats_json(step.stats)}};
+}
+
+void print_table(std::ostream& out, const StepResult& step) {
+  const PairResult& pair = step.pairs.at(0);
+  char line[256];
+  std::snprintf(line, sizeof line, "colliding: %s   mode: %s   contacts: %zu   max depth: %.6g   predictive: %zu\n",
+                pair.colliding ? "yes" : "no", to_string(pair.mode), pair.contact_count, pair.max_depth,
+                pair.predictive_count);
+  out << line;
+  auto row = [&](const RayRecord& r, double value, double projected) {
+    std::snprintf(line, sizeof line, "  %-3s %6u %8d %11.6g %11.6g  (%9.4f %9.4f %9.4f)  (%7.4f %7.4f %7.4f)\n",
+                  r.source == Side::a ? "a" : "b", r.vertex, r.triangle, value, projected, r.origin.x(),
+                  r.origin.y(), r.origin.z(), r.normal.x(), r.normal.y(), r.normal.z());
+    out << line;
+  };
+  if (pair.contact_count > 0) {
+    out << "  src vertex triangle       depth   projected  origin                           normal\n";
+    for (const Contact& c : step.contacts_of(pair)) row(c, c.depth, c.projected_depth);
+  }
+  if (pair.predictive_count > 0) {
+    out << "  predictive rays:\n  src vertex triangle    distance           -  origin                           normal\n";
+    for (const PredictiveRay& p : step.predictive_of(pair)) row(p, p.distance, 0.0);
+  }
+  const StepStats& s = step.stats;
+  std::snprintf(line, sizeof line,
+                "rays: %zu full, %zu predictive, %zu iterative; candidates %zu; walk steps %zu; time %.3f ms\n",
+                s.rays_full, s.rays_predictive, s.rays_iterative, s.candidates, s.walk_steps,
+                1e3 * (s.seconds_prepare + s.seconds_full + s.seconds_iterative + s.seconds_gather));
+  out << line;
+}
+
+}  // namespace rtcd::cli

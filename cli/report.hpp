@@ -1,0 +1,16 @@
+// Printing results: one JSON object per step, or a readable table.
+#pragma once
+
+#include <ostream>
+
+#include <nlohmann/json.hpp>
+
+#include "rtcd/results.hpp"
+
+namespace rtcd::cli {
+
+// The result of the single pair of a `rtcd query` step.
+nlohmann::json to_json(const StepResult& step);
+void print_table(std::ostream& out, const StepResult& step);
+
+}  // namespace rtcd::cli

@@ -1,0 +1,14 @@
+# install() and a package config, so find_package(rtcd) works for hosts.
+include(CMakePackageConfigHelpers)
+install(TARGETS rtcd_core ${RTCD_BACKEND_TARGETS} rtcd_lib rtcd_cli
+  EXPORT rtcdTargets
+  RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
+  ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}
+  LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+install(DIRECTORY core/include/ DESTINATION ${CMAKE_INSTALL_INCLUDEDIR})
+install(EXPORT rtcdTargets NAMESPACE rtcd:: DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/rtcd)
+configure_package_config_file(cmake/rtcdConfig.cmake.in ${CMAKE_CURRENT_BINARY_DIR}/rtcdConfig.cmake
+  INSTALL_DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/rtcd)
+write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/rtcdConfigVersion.cmake COMPATIBILITY SameMinorVersion)
+install(FILES ${CMAKE_CURRENT_BINARY_DIR}/rtcdConfig.cmake ${CMAKE_CURRENT_BINARY_DIR}/rtcdConfigVersion.cmake
+  DESTINATION ${CMAKE_INSTALL_LIBDIR}/cmake/rtcd)

@@ -1,0 +1,54 @@
+// The accuracy/time knobs of the narrow phase. Every one trades accuracy
+// for time; each says its range, default and cost.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+namespace rtcd {
+
+enum class Mode {
+  full,       // trace every candidate ray every step (no pair state is used)
+  iterative,  // after a pair's first full step, always walk from last step's triangles
+  automatic,  // iterative while equation 2.1 stays under displacement_threshold, else full
+};
+
+const char* to_string(Mode mode);
+Mode parse_mode(const std::string& text);  // "full" | "iterative" | "auto"; ConfigError otherwise
+
+struct Config {
+  // Most triangles one walk visits before it gives up (Algorithm 1's max).
+  // Range [1, 1'000'000]. Default 32. Cost: linear in the steps walks take;
+  // too low loses rays that moved across many triangles.
+  uint32_t max_walk_steps = 32;
+
+  // Relative motion (equation 2.1, in length units) since a pair's last full
+  // step above which the pair is traced in full again. Range [0, distance_extension].
+  // Default 0.05. Cost: higher keeps pairs iterative longer (cheaper) but
+  // walks lose more rays on concave regions.
+  double displacement_threshold = 0.05;
+
+  // How far outside the other body a vertex is still tracked by a predictive
+  // ray, and how much both bounding boxes grow before selecting candidate
+  // vertices. Range [0, 1e30), and >= displacement_threshold. Default 0.1.
+  // Cost: more candidate vertices and longer predictive rays.
+  double distance_extension = 0.1;
+
+  // Cast predictive rays so vertices about to penetrate are tracked by the
+  // iterative walk (section 2.1.3). Default on. Cost: one short extra ray per
+  // non-penetrating candidate in full steps, one walk per tracked vertex after.
+  bool predictive = true;
+
+  // Push along the impacted triangle's normal by the projected depth
+  // (section 2.2) rather than along the ray by its depth: what Contact::push
+  // holds. Default on. Cost: none here; it changes what the solver receives.
+  bool projected = true;
+
+  // Full, iterative or automatic (default).
+  Mode mode = Mode::automatic;
+
+  // Throws ConfigError naming the field and its allowed range.
+  void validate() const;
+};
+
+}  // namespace rtcd

@@ -1,0 +1,40 @@
+// The CPU narrow phase shared by the basic and Embree backends: pair state,
+// equation 2.1, candidate selection, the walk and the predictive logic run
+// here through the kernel code; a backend supplies only the full tracer.
+#pragma once
+
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rtcd/kernel/locate.h"
+#include "rtcd/narrow_phase.hpp"
+
+namespace rtcd {
+
+// First hit of a ray with one mesh, in the mesh's local frame.
+struct TraceHit {
+  int32_t triangle = -1;  // -1: nothing within range
+  float t = 0.0f;
+};
+
+// A full tracer built once for one mesh shape.
+class MeshTracer {
+ public:
+  virtual ~MeshTracer() = default;
+  // Nearest triangle met by origin + t * direction with 0 <= t <= t_max,
+  // from either side; zero-area triangles are never hit.
+  virtual TraceHit first_hit(const rtcd_ray& ray, float t_max) const = 0;
+};
+
+class MeshTracerFactory {
+ public:
+  virtual ~MeshTracerFactory() = default;
+  virtual std::unique_ptr<MeshTracer> build(const Mesh& mesh) const = 0;
+};
+
+std::unique_ptr<NarrowPhase> make_cpu_narrow_phase(std::string name, std::vector<std::string> devices,
+                                                   std::unique_ptr<MeshTracerFactory> tracers,
+                                                   const Config& config);
+
+}  // namespace rtcd

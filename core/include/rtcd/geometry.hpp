@@ -1,0 +1,49 @@
+// Small geometric value types of the public API: poses and boxes.
+#pragma once
+
+#include <Eigen/Geometry>
+
+namespace rtcd {
+
+// A rigid placement: world = orientation * local + position. Double
+// precision so bodies far from the origin keep their relative precision.
+struct Pose {
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();
+  Eigen::Quaterniond orientation = Eigen::Quaterniond::Identity();
+
+  Eigen::Vector3d apply(const Eigen::Vector3d& local) const { return orientation * local + position; }
+  Pose inverse() const {
+    Eigen::Quaterniond inv = orientation.conjugate();
+    return {inv * -position, inv};
+  }
+  // this ∘ other: first other, then this.
+  Pose operator*(const Pose& other) const {
+    return {orientation * other.position + position, orientation * other.orientation};
+  }
+};
+
+// Throws UsageError when a component is not finite or the quaternion is far
+// from unit length; returns the pose with its quaternion normalised.
+Pose checked(const Pose& pose);
+
+struct Aabb {
+  Eigen::Vector3d min = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d max = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+
+  void extend(const Eigen::Vector3d& p) {
+    min = min.cwiseMin(p);
+    max = max.cwiseMax(p);
+  }
+  bool empty() const { return (min.array() > max.array()).any(); }
+  bool contains(const Eigen::Vector3d& p) const {
+    return (p.array() >= min.array()).all() && (p.array() <= max.array()).all();
+  }
+  Aabb grown(double margin) const {
+    return {min.array() - margin, max.array() + margin};
+  }
+  Aabb intersection(const Aabb& other) const { return {min.cwiseMax(other.min), max.cwiseMin(other.max)}; }
+  // The axis-aligned box around this box placed by `pose`.
+  Aabb transformed(const Pose& pose) const;
+};
+
+}  // namespace rtcd

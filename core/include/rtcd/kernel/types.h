@@ -1,0 +1,62 @@
+/* Plain types and vector helpers for the per-ray kernel code.
+ * This header and its siblings are written in the subset of C that is valid
+ * C++ and valid OpenCL C 1.2, so the CPU backends and the device compile the
+ * same text. Only sqrt and fabs are used from the math library. Compile
+ * without floating-point contraction on both sides (-ffp-contract=off; the
+ * pragma below for OpenCL) so both agree bit for bit on walk decisions. */
+#ifndef RTCD_KERNEL_TYPES_H
+#define RTCD_KERNEL_TYPES_H
+
+#ifdef __OPENCL_C_VERSION__
+#pragma OPENCL FP_CONTRACT OFF
+#define RTCD_GLOBAL __global
+#define RTCD_INLINE static inline
+#define RTCD_SQRT(x) sqrt(x)
+#define RTCD_FABS(x) fabs(x)
+typedef uint rtcd_uint;
+typedef int rtcd_int;
+#else
+#include <math.h>
+#include <stdint.h>
+#define RTCD_GLOBAL
+#define RTCD_INLINE static inline
+#define RTCD_SQRT(x) sqrtf(x)
+#define RTCD_FABS(x) fabsf(x)
+typedef uint32_t rtcd_uint;
+typedef int32_t rtcd_int;
+#endif
+
+/* Three packed floats: 12 bytes, the layout of the host's position arrays. */
+typedef struct {
+  float x, y, z;
+} rtcd_vec3;
+
+RTCD_INLINE rtcd_vec3 rtcd_v3(float x, float y, float z) {
+  rtcd_vec3 r;
+  r.x = x;
+  r.y = y;
+  r.z = z;
+  return r;
+}
+RTCD_INLINE rtcd_vec3 rtcd_sub(rtcd_vec3 a, rtcd_vec3 b) { return rtcd_v3(a.x - b.x, a.y - b.y, a.z - b.z); }
+RTCD_INLINE rtcd_vec3 rtcd_neg(rtcd_vec3 a) { return rtcd_v3(-a.x, -a.y, -a.z); }
+RTCD_INLINE float rtcd_dot(rtcd_vec3 a, rtcd_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+RTCD_INLINE rtcd_vec3 rtcd_cross(rtcd_vec3 a, rtcd_vec3 b) {
+  return rtcd_v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
+}
+RTCD_INLINE float rtcd_component(rtcd_vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
+
+/* How a ray's line ended up against the target surface. Shared by the walk,
+ * the full tracers and the basic volumes, so statistics read the same. */
+typedef enum {
+  RTCD_LINE_HIT = 0,        /* leaves the target through this triangle at t >= 0: the origin is inside */
+  RTCD_LINE_BEHIND = 1,     /* leaves the target at t < 0: the origin is outside, -t away */
+  RTCD_LINE_FRONT = 2,      /* the located crossing enters the target: no penetration there */
+  RTCD_LINE_BOUNDARY = 3,   /* the walk left the mesh through a boundary edge */
+  RTCD_LINE_MISS = 4,       /* the line passes beside the surface (walk turned back at a silhouette) */
+  RTCD_LINE_STEP_LIMIT = 5, /* the walk used its step budget (concave trap) */
+  RTCD_LINE_PARALLEL = 6    /* the triangle is edge-on to the ray (or has zero area) */
+} rtcd_line_status;
+#define RTCD_LINE_STATUS_COUNT 7
+
+#endif

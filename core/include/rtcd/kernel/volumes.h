@@ -1,0 +1,73 @@
+/* Exact line intersection with the basic volumes, in their local frame
+ * (centred at the origin, axis-aligned). The statuses read as for a mesh:
+ * HIT when the origin is inside and the ray leaves at t >= 0. */
+#ifndef RTCD_KERNEL_VOLUMES_H
+#define RTCD_KERNEL_VOLUMES_H
+
+#include "walk.h"
+
+typedef struct {
+  int status; /* rtcd_line_status: HIT, BEHIND, FRONT or MISS */
+  int face;   /* box: exit face 0..5 = +x,-x,+y,-y,+z,-z; sphere: 0 */
+  float t;    /* exit distance (entry distance when FRONT) */
+} rtcd_volume_hit;
+
+RTCD_INLINE rtcd_volume_hit rtcd_classify_span(float t_in, float t_out, int face) {
+  rtcd_volume_hit h;
+  h.face = face;
+  if (t_out < 0.0f) {
+    h.status = RTCD_LINE_BEHIND;
+    h.t = t_out;
+  } else if (t_in > 0.0f) {
+    h.status = RTCD_LINE_FRONT;
+    h.t = t_in;
+  } else {
+    h.status = RTCD_LINE_HIT;
+    h.t = t_out;
+  }
+  return h;
+}
+
+/* direction must be unit length. */
+RTCD_INLINE rtcd_volume_hit rtcd_sphere_line(rtcd_vec3 origin, rtcd_vec3 direction, float radius) {
+  float b = rtcd_dot(origin, direction);
+  float c = rtcd_dot(origin, origin) - radius * radius;
+  float disc = b * b - c;
+  if (disc < 0.0f) {
+    rtcd_volume_hit miss;
+    miss.status = RTCD_LINE_MISS;
+    miss.face = 0;
+    miss.t = 0.0f;
+    return miss;
+  }
+  float s = RTCD_SQRT(disc);
+  return rtcd_classify_span(-b - s, -b + s, 0);
+}
+
+RTCD_INLINE rtcd_volume_hit rtcd_box_line(rtcd_vec3 origin, rtcd_vec3 direction, rtcd_vec3 half_extents) {
+  float t_in = -3.0e38f, t_out = 3.0e38f;
+  int exit_face = 0;
+  rtcd_volume_hit miss;
+  miss.status = RTCD_LINE_MISS;
+  miss.face = 0;
+  miss.t = 0.0f;
+  for (int k = 0; k < 3; ++k) {
+    float o = rtcd_component(origin, k), d = rtcd_component(direction, k), h = rtcd_component(half_extents, k);
+    if (d == 0.0f) {
+      if (o < -h || o > h) return miss;
+      continue;
+    }
+    float t_lo = (-h - o) / d, t_hi = (h - o) / d;
+    float t_near = d > 0.0f ? t_lo : t_hi;
+    float t_far = d > 0.0f ? t_hi : t_lo;
+    if (t_near > t_in) t_in = t_near;
+    if (t_far < t_out) {
+      t_out = t_far;
+      exit_face = 2 * k + (d > 0.0f ? 0 : 1);
+    }
+  }
+  if (t_in > t_out) return miss;
+  return rtcd_classify_span(t_in, t_out, exit_face);
+}
+
+#endif

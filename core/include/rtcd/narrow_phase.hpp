@@ -1,0 +1,57 @@
+// The one interface every backend implements, and the registry that makes
+// them by name at run time.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rtcd/config.hpp"
+#include "rtcd/geometry.hpp"
+#include "rtcd/results.hpp"
+#include "rtcd/shape.hpp"
+
+namespace rtcd {
+
+class NarrowPhase {
+ public:
+  virtual ~NarrowPhase() = default;
+
+  // The backend's registry name ("basic", "embree", ...).
+  virtual std::string name() const = 0;
+  // Devices this instance runs on, in words.
+  virtual std::vector<std::string> devices() const = 0;
+  const Config& config() const { return config_; }
+
+  // Registers a shape once (acceleration structures are built here, never
+  // because a body moved). Many bodies may share one shape.
+  virtual ShapeId add_shape(std::shared_ptr<const Shape> shape) = 0;
+  virtual BodyId add_body(ShapeId shape, const Pose& pose) = 0;
+  // Forgets the body and every pair state that involves it.
+  virtual void remove_body(BodyId body) = 0;
+  virtual void set_pose(BodyId body, const Pose& pose) = 0;
+
+  // One step over the broad phase's candidate pairs. Pair state carries
+  // from one call to the next; a pair absent from `pairs` is evicted.
+  virtual StepResult detect(std::span<const BodyPair> pairs) = 0;
+
+ protected:
+  explicit NarrowPhase(Config config) : config_(config) { config_.validate(); }
+  Config config_;
+};
+
+struct BackendInfo {
+  std::string name;
+  bool usable = false;
+  std::string detail;  // devices, or why it cannot run here
+};
+
+// Backends built into this library, usable or not.
+std::vector<BackendInfo> available_backends();
+
+// "basic", "embree" or "auto" (the fastest usable one; name() says which).
+// Throws BackendError listing what is available, ConfigError for a bad config.
+std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Config& config = {});
+
+}  // namespace rtcd

@@ -1,0 +1,98 @@
+// What a step of the narrow phase returns: contacts, predictive rays, a
+// summary per pair and statistics per step.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rtcd/config.hpp"
+#include "rtcd/kernel/types.h"
+
+namespace rtcd {
+
+using BodyId = uint32_t;
+using ShapeId = uint32_t;
+
+// A candidate pair from the host's broad phase. Both directions are done:
+// a's ray origins against b, and b's against a.
+struct BodyPair {
+  BodyId a = 0;
+  BodyId b = 0;
+};
+
+enum class Side : uint8_t { a, b };  // which body of the pair cast the ray
+
+// Fields common to a penetrating ray and a predictive one (world frame).
+struct RayRecord {
+  Side source = Side::a;
+  BodyId source_body = 0;
+  BodyId target_body = 0;
+  uint32_t vertex = 0;    // ray origin index in the source shape (a mesh vertex)
+  int32_t triangle = -1;  // impacted triangle of the target (box: face 0..5, sphere: 0)
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();     // the source vertex
+  Eigen::Vector3d direction = Eigen::Vector3d::Zero();  // unit, the source's inward normal
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero();     // unit outward normal of the impacted triangle
+};
+
+// One penetrating ray: the vertex is inside the target; moving it by
+// direction * depth brings it to the target's surface.
+struct Contact : RayRecord {
+  double depth = 0.0;
+  double projected_depth = 0.0;  // depth * |direction . normal| (section 2.2)
+  // What to move the source vertex by to separate: normal * projected_depth
+  // when Config::projected, direction * depth otherwise.
+  Eigen::Vector3d push = Eigen::Vector3d::Zero();
+};
+
+// A vertex outside the target, within distance_extension of it along its
+// outward normal: tracked so the walk sees it penetrate.
+struct PredictiveRay : RayRecord {
+  double distance = 0.0;
+};
+
+enum class PairMode : uint8_t { full, iterative };
+const char* to_string(PairMode mode);
+
+struct PairResult {
+  BodyPair pair;
+  bool colliding = false;
+  PairMode mode = PairMode::full;
+  double max_depth = 0.0;
+  // Ranges into StepResult::contacts and ::predictive.
+  size_t first_contact = 0, contact_count = 0;
+  size_t first_predictive = 0, predictive_count = 0;
+};
+
+struct StepStats {
+  size_t pairs_full = 0, pairs_iterative = 0;
+  size_t fallbacks_to_full = 0;  // pairs with state sent back to full by equation 2.1
+  size_t candidates = 0;         // ray origins inside the grown bounding-box overlap
+  size_t rays_full = 0;          // inward rays traced in full steps
+  size_t rays_predictive = 0;    // outward predictive rays traced in full steps
+  size_t rays_iterative = 0;     // tracked rays walked in iterative steps
+  size_t walk_steps = 0;         // triangles located by all walks
+  std::array<size_t, RTCD_LINE_STATUS_COUNT> walk_endings{};  // iterative rays by rtcd_line_status
+  double seconds_prepare = 0, seconds_full = 0, seconds_iterative = 0, seconds_gather = 0;
+};
+
+struct StepResult {
+  std::vector<PairResult> pairs;  // in input order
+  std::vector<Contact> contacts;  // grouped by pair, a's rays first, by vertex
+  std::vector<PredictiveRay> predictive;
+  StepStats stats;
+
+  std::span<const Contact> contacts_of(const PairResult& p) const {
+    return std::span(contacts).subspan(p.first_contact, p.contact_count);
+  }
+  std::span<const PredictiveRay> predictive_of(const PairResult& p) const {
+    return std::span(predictive).subspan(p.first_predictive, p.predictive_count);
+  }
+};
+
+const char* line_status_name(int status);  // rtcd_line_status → "hit", "behind", ...
+
+}  // namespace rtcd

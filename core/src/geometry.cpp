@@ -1,0 +1,101 @@
+// Poses, boxes, equation 2.1 and the names of enums.
+#include <cmath>
+#include <sstream>
+
+#include "rtcd/config.hpp"
+#include "rtcd/criterion.hpp"
+#include "rtcd/error.hpp"
+#include "rtcd/geometry.hpp"
+#include "rtcd/results.hpp"
+
+namespace rtcd {
+
+Pose checked(const Pose& pose) {
+  const Eigen::Vector4d q = pose.orientation.coeffs();
+  if (!pose.position.allFinite() || !q.allFinite()) throw UsageError("pose has a non-finite component");
+  const double norm = q.norm();
+  if (std::abs(norm - 1.0) > 1e-3) {
+    std::ostringstream s;
+    s << "pose quaternion has length " << norm << ", expected 1 (within 1e-3)";
+    throw UsageError(s.str());
+  }
+  Pose p = pose;
+  p.orientation.normalize();
+  return p;
+}
+
+Aabb Aabb::transformed(const Pose& pose) const {
+  const Eigen::Vector3d center = 0.5 * (min + max);
+  const Eigen::Vector3d half = 0.5 * (max - min);
+  const Eigen::Matrix3d r = pose.orientation.toRotationMatrix().cwiseAbs();
+  const Eigen::Vector3d c = pose.apply(center);
+  const Eigen::Vector3d h = r * half;
+  return {c - h, c + h};
+}
+
+double rotation_angle(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2) {
+  const Eigen::Quaterniond d = q1.conjugate() * q2;
+  // |w| folds q and -q together; atan2 keeps precision at both ends.
+  return 2.0 * std::atan2(d.vec().norm(), std::abs(d.w()));
+}
+
+double max_displacement(const Pose& relative_at_full_step, const Pose& relative_now, double max_radius) {
+  return (relative_at_full_step.position - relative_now.position).norm() +
+         rotation_angle(relative_at_full_step.orientation, relative_now.orientation) * max_radius;
+}
+
+const char* to_string(Mode mode) {
+  switch (mode) {
+    case Mode::full: return "full";
+    case Mode::iterative: return "iterative";
+    case Mode::automatic: return "auto";
+  }
+  return "?";
+}
+
+Mode parse_mode(const std::string& text) {
+  if (text == "full") return Mode::full;
+  if (text == "iterative") return Mode::iterative;
+  if (text == "auto") return Mode::automatic;
+  throw ConfigError("unknown mode '" + text + "' (expected full, iterative or auto)");
+}
+
+void Config::validate() const {
+  auto fail = [](const std::string& what) { throw ConfigError(what); };
+  if (max_walk_steps < 1 || max_walk_steps > 1'000'000)
+    fail("max_walk_steps = " + std::to_string(max_walk_steps) + " is outside [1, 1000000]");
+  if (!std::isfinite(distance_extension) || distance_extension < 0 || distance_extension >= 1e30)
+    fail("distance_extension = " + std::to_string(distance_extension) + " is outside [0, 1e30)");
+  if (!std::isfinite(displacement_threshold) || displacement_threshold < 0)
+    fail("displacement_threshold = " + std::to_string(displacement_threshold) + " must be finite and >= 0");
+  if (displacement_threshold > distance_extension)
+    fail("displacement_threshold (" + std::to_string(displacement_threshold) +
+         ") must not exceed distance_extension (" + std::to_string(distance_extension) +
+         "): predictive rays only cover motions up to distance_extension");
+}
+
+const char* to_string(PairMode mode) { return mode == PairMode::full ? "full" : "iterative"; }
+
+const char* line_status_name(int status) {
+  static const char* names[RTCD_LINE_STATUS_COUNT] = {"hit",  "behind",     "front",   "boundary",
+                                                      "miss", "step_limit", "parallel"};
+  return status >= 0 && status < RTCD_LINE_STATUS_COUNT ? names[status] : "?";
+}
+
+const char* to_string(MeshErrorKind kind) {
+  switch (kind) {
+    case MeshErrorKind::empty: return "empty";
+    case MeshErrorKind::non_finite_coordinate: return "non_finite_coordinate";
+    case MeshErrorKind::index_out_of_range: return "index_out_of_range";
+    case MeshErrorKind::repeated_vertex: return "repeated_vertex";
+    case MeshErrorKind::zero_area_triangle: return "zero_area_triangle";
+    case MeshErrorKind::non_manifold_edge: return "non_manifold_edge";
+    case MeshErrorKind::inconsistent_winding: return "inconsistent_winding";
+    case MeshErrorKind::unreferenced_vertex: return "unreferenced_vertex";
+    case MeshErrorKind::inverted: return "inverted";
+    case MeshErrorKind::file: return "file";
+  }
+  return "?";
+}
+
+}  // namespace rtcd

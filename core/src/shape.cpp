@@ -1,0 +1,87 @@
+// Shapes and their ray sources.
+#include "rtcd/shape.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "rtcd/error.hpp"
+#include "rtcd/mesh_gen.hpp"
+
+namespace rtcd {
+namespace {
+
+void check_density(double density) {
+  if (!std::isfinite(density) || density < 0 || density > 1e7)
+    throw UsageError("sampling density " + std::to_string(density) + " is outside [0, 1e7] origins per unit area");
+}
+
+void add_source(RaySources& s, const Eigen::Vector3d& origin, const Eigen::Vector3d& inward) {
+  s.origins.push_back(origin.cast<float>());
+  s.directions.push_back(inward.normalized().cast<float>());
+}
+
+}  // namespace
+
+Shape::Shape(Mesh mesh) : geometry_(std::move(mesh)) {
+  const Mesh& m = std::get<Mesh>(geometry_);
+  sources_.origins.assign(m.positions().begin(), m.positions().end());
+  sources_.directions.reserve(m.vertex_count());
+  for (const auto& n : m.vertex_normals()) sources_.directions.push_back(-n);
+  bounds_ = m.bounds();
+  radius_ = m.radius();
+}
+
+Shape::Shape(Sphere sphere, double density) : geometry_(sphere) {
+  if (!std::isfinite(sphere.radius) || sphere.radius <= 0)
+    throw UsageError("sphere radius " + std::to_string(sphere.radius) + " must be finite and > 0");
+  check_density(density);
+  const double r = sphere.radius;
+  const Mesh ico = gen::icosphere(1.0, 2);
+  for (const auto& p : ico.positions()) add_source(sources_, r * p.cast<double>(), -p.cast<double>());
+  // Fibonacci lattice: evenly spread, deterministic.
+  const long n = std::lround(density * 4 * std::numbers::pi * r * r);
+  const double golden = std::numbers::pi * (3 - std::sqrt(5.0));
+  for (long i = 0; i < n; ++i) {
+    const double z = 1 - (2 * i + 1.0) / n, s = std::sqrt(1 - z * z), phi = golden * i;
+    const Eigen::Vector3d u(s * std::cos(phi), s * std::sin(phi), z);
+    add_source(sources_, r * u, -u);
+  }
+  bounds_ = {Eigen::Vector3d::Constant(-r), Eigen::Vector3d::Constant(r)};
+  radius_ = r;
+}
+
+Shape::Shape(Box box, double density) : geometry_(box) {
+  const Eigen::Vector3d h = box.half_extents;
+  if (!h.allFinite() || (h.array() <= 0).any()) throw UsageError("box half extents must be finite and > 0");
+  check_density(density);
+  for (int i = 0; i < 8; ++i) {
+    const Eigen::Vector3d sign(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
+    add_source(sources_, sign.cwiseProduct(h), -sign);
+  }
+  if (density > 0) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const int u = (axis + 1) % 3, v = (axis + 2) % 3;
+      const long nu = std::max(1L, std::lround(2 * h[u] * std::sqrt(density)));
+      const long nv = std::max(1L, std::lround(2 * h[v] * std::sqrt(density)));
+      for (double side : {1.0, -1.0})
+        for (long i = 0; i < nu; ++i)
+          for (long j = 0; j < nv; ++j) {
+            Eigen::Vector3d p;
+            p[axis] = side * h[axis];
+            p[u] = h[u] * (2 * (i + 0.5) / nu - 1);
+            p[v] = h[v] * (2 * (j + 0.5) / nv - 1);
+            add_source(sources_, p, -side * Eigen::Vector3d::Unit(axis));
+          }
+    }
+  }
+  bounds_ = {-h, h};
+  radius_ = h.norm();
+}
+
+const char* Shape::kind() const {
+  if (std::holds_alternative<Mesh>(geometry_)) return "mesh";
+  if (std::holds_alternative<Sphere>(geometry_)) return "sphere";
+  return "box";
+}
+
+}  // namespace rtcd

@@ -1,0 +1,132 @@
+// The `rtcd` command: outputs, sequences, and exit code 2 on every bad input.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <sys/wait.h>
+#include <unistd.h>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+namespace {
+
+struct Outcome {
+  int code;
+  std::string out;
+};
+
+// Runs the command with stderr folded into the output.
+Outcome run(const std::string& args) {
+  const std::string cmd = std::string(RTCD_CLI) + " " + args + " 2>&1";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  std::string out;
+  std::array<char, 4096> buf;
+  while (size_t n = fread(buf.data(), 1, buf.size(), pipe)) out.append(buf.data(), n);
+  const int status = pclose(pipe);
+  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
+}
+
+const std::string data = std::string(RTCD_DATA_DIR) + "/meshes/";
+
+TEST(Cli, BackendsJson) {
+  const Outcome r = run("backends --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_TRUE(j.is_array());
+  bool basic = false;
+  for (const auto& b : j) basic |= b["name"] == "basic" && b["usable"] == true;
+  EXPECT_TRUE(basic);
+}
+
+TEST(Cli, QueryHandComputedCubesJson) {
+  for (const std::string& pair : {data + "box.obj box:0.6,0.6,0.6", std::string("box:0.5,0.5,0.5 box:0.6,0.6,0.6")}) {
+    const Outcome r = run("query " + pair + " --pose-b \"1 0 0 1 0 0 0\" --json");
+    ASSERT_EQ(r.code, 0) << r.out;
+    const auto j = nlohmann::json::parse(r.out);
+    EXPECT_TRUE(j["colliding"].get<bool>());
+    ASSERT_EQ(j["contacts"].size(), 4u);
+    for (const auto& c : j["contacts"]) {
+      EXPECT_EQ(c["source"], "a");
+      EXPECT_NEAR(c["depth"].get<double>(), 0.1 * std::sqrt(3.0), 1e-6);
+      EXPECT_NEAR(c["projected_depth"].get<double>(), 0.1, 1e-6);
+      EXPECT_NEAR(c["normal"][0].get<double>(), -1.0, 1e-6);
+    }
+  }
+}
+
+TEST(Cli, QueryTableOnCommittedMeshes) {
+  const Outcome r = run("query " + data + "blob_902.obj " + data + "stream_2130.obj --pose-b \"1.2 0 0 1 0 0 0\"");
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("colliding: yes"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("depth"), std::string::npos);
+}
+
+class CliFiles : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() / ("rtcd_cli_" + std::to_string(::getpid()));
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string write(const std::string& name, const std::string& text) {
+    std::ofstream(dir_ / name) << text;
+    return (dir_ / name).string();
+  }
+  std::filesystem::path dir_;
+};
+
+// The pair state carries across a sequence: the second step is iterative and
+// predictive rays catch the new contacts (B approaching A).
+TEST_F(CliFiles, SequenceCarriesPairState) {
+  const std::string seq = write("seq.json", R"([{"pose_a": [0,0,0,1,0,0,0], "pose_b": [1.03,0,0,1,0,0,0]},
+                                                 {"pose_a": [0,0,0,1,0,0,0], "pose_b": [0.99,0,0,1,0,0,0]}])");
+  const Outcome r = run("query " + data + "box.obj " + data + "box.obj --sequence " + seq + " --json");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j.size(), 2u);
+  EXPECT_EQ(j[0]["mode"], "full");
+  EXPECT_FALSE(j[0]["colliding"].get<bool>());
+  EXPECT_EQ(j[0]["predictive"].size(), 8u);
+  EXPECT_EQ(j[1]["mode"], "iterative");
+  EXPECT_EQ(j[1]["contacts"].size(), 8u);
+  const Outcome off = run("query " + data + "box.obj " + data + "box.obj --sequence " + seq + " --json --no-predictive");
+  EXPECT_EQ(nlohmann::json::parse(off.out)[1]["contacts"].size(), 0u);
+}
+
+TEST_F(CliFiles, EveryBadInputExitsWith2AndOneClearLine) {
+  const std::string box = data + "box.obj";
+  const std::string garbage = write("garbage.obj", "v 1 2\nf 1 2 9\n");
+  const std::string flipped = write("flipped.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 2 3\n3 1 2 3\n");
+  const std::string bad_json = write("bad.json", "[{\"pose_a\": [0,0,0,1,0,0,0]}");
+  const std::string short_pose = write("short.json", R"([{"pose_a": [0,0,0,1,0,0], "pose_b": [0,0,0,1,0,0,0]}])");
+  const std::vector<std::pair<std::string, std::string>> cases = {
+      {"query /nonexistent.obj " + box, "no such file"},
+      {"query " + garbage + " " + box, "garbage.obj"},
+      {"query " + flipped + " " + box, "winding"},
+      {"query " + box + " " + box + " --pose-b \"1 0 0 1 0 0\"", "expected 7 numbers"},
+      {"query " + box + " " + box + " --pose-b \"1 0 0 x 0 0 0\"", "not a finite number"},
+      {"query " + box + " " + box + " --pose-b \"1 0 0 0 0 0 0\"", "quaternion"},
+      {"query " + box + " " + box + " --mode sometimes", "unknown mode"},
+      {"query " + box + " " + box + " --backend warp", "available"},
+      {"query " + box + " " + box + " --displacement-threshold 0.5", "must not exceed"},
+      {"query " + box + " " + box + " --max-walk-steps 0", "max_walk_steps"},
+      {"query " + box + " " + box + " --sequence " + bad_json, "not valid JSON"},
+      {"query " + box + " " + box + " --sequence " + short_pose, "expected 7 numbers"},
+      {"query " + box + " sphere:-1", "radius"},
+      {"query " + box + " box:1,2", "box:HX,HY,HZ"},
+      {"query " + box + " " + box + " --frobnicate", "frobnicate"},
+      {"query " + box, "B"},
+      {"", "subcommand"},
+  };
+  for (const auto& [args, fragment] : cases) {
+    const Outcome r = run(args);
+    EXPECT_EQ(r.code, 2) << args << "\n" << r.out;
+    EXPECT_NE(r.out.find(fragment), std::string::npos) << args << "\n" << r.out;
+    EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << "\n" << r.out;
+  }
+}
+
+}  // namespace

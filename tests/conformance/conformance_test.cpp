@@ -1,0 +1,305 @@
+// One test body, run against every usable backend: hand-computed contacts,
+// iterative against full, predictive rays, and agreement with `basic`.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include "rtcd/error.hpp"
+#include "rtcd/mesh_gen.hpp"
+#include "support.hpp"
+
+namespace rtcd::test {
+namespace {
+
+class Conformance : public ::testing::TestWithParam<std::string> {
+ protected:
+  PairRig rig(std::shared_ptr<const Shape> a, std::shared_ptr<const Shape> b, const Config& c = {}) {
+    return PairRig(GetParam(), std::move(a), std::move(b), c);
+  }
+};
+
+std::shared_ptr<const Shape> box_mesh(double h) { return shape(gen::box({h, h, h})); }
+std::shared_ptr<const Shape> box_volume(double h) { return std::make_shared<Shape>(Box{{h, h, h}}); }
+
+// Cube A (half 0.5) at the origin, cube B (half 0.6) at (1, 0, 0): exactly
+// A's four +x vertices penetrate, along -(1, ±1, ±1)/√3, to B's face x = 0.4.
+void expect_cube_contacts(const StepResult& r) {
+  ASSERT_EQ(r.contacts.size(), 4u);
+  for (const Contact& c : r.contacts) {
+    EXPECT_EQ(c.source, Side::a);
+    EXPECT_NEAR(c.origin.x(), 0.5, 1e-7);
+    EXPECT_NEAR(std::abs(c.origin.y()), 0.5, 1e-7);
+    const Eigen::Vector3d inward = -Eigen::Vector3d(1, c.origin.y() > 0 ? 1 : -1, c.origin.z() > 0 ? 1 : -1) / std::sqrt(3.0);
+    EXPECT_NEAR((c.direction - inward).norm(), 0.0, 1e-6);
+    EXPECT_NEAR(c.depth, 0.1 * std::sqrt(3.0), 1e-6);
+    EXPECT_NEAR(c.projected_depth, 0.1, 1e-6);
+    EXPECT_NEAR((c.normal - Eigen::Vector3d(-1, 0, 0)).norm(), 0.0, 1e-6);
+    EXPECT_NEAR((c.push - Eigen::Vector3d(-0.1, 0, 0)).norm(), 0.0, 1e-6);
+  }
+  ASSERT_EQ(r.pairs.size(), 1u);
+  EXPECT_TRUE(r.pairs[0].colliding);
+  EXPECT_NEAR(r.pairs[0].max_depth, 0.1 * std::sqrt(3.0), 1e-6);
+}
+
+TEST_P(Conformance, CubesAsMeshes) {
+  auto r = rig(box_mesh(0.5), box_mesh(0.6));
+  expect_cube_contacts(r.step(Pose{}, at(1, 0, 0)));
+}
+
+TEST_P(Conformance, CubesAsBoxVolumes) {
+  auto r = rig(box_volume(0.5), box_volume(0.6));
+  expect_cube_contacts(r.step(Pose{}, at(1, 0, 0)));
+}
+
+TEST_P(Conformance, CubesMixed) {
+  auto r1 = rig(box_mesh(0.5), box_volume(0.6));
+  expect_cube_contacts(r1.step(Pose{}, at(1, 0, 0)));
+  auto r2 = rig(box_volume(0.5), box_mesh(0.6));
+  expect_cube_contacts(r2.step(Pose{}, at(1, 0, 0)));
+}
+
+TEST_P(Conformance, CubesFarFromTheOrigin) {
+  auto r = rig(box_mesh(0.5), box_mesh(0.6));
+  expect_cube_contacts(r.step(at(148376, 1234, -223423), at(148377, 1234, -223423)));
+}
+
+// A sphere of radius 0.5 at the origin against a box (half 0.5) at (0.9, 0, 0):
+// the sphere's source points with x > 0.4 are inside and leave through x = 0.4.
+TEST_P(Conformance, SphereAgainstBox) {
+  auto sphere = std::make_shared<Shape>(Sphere{0.5});
+  for (auto box : {box_volume(0.5), box_mesh(0.5)}) {
+    auto r = rig(sphere, box);
+    const StepResult res = r.step(Pose{}, at(0.9, 0, 0));
+    size_t expected = 0;
+    for (const auto& o : sphere->sources().origins) expected += o.x() > 0.4f;
+    ASSERT_GT(expected, 0u);
+    size_t from_sphere = 0;
+    for (const Contact& c : res.contacts) {
+      if (c.source != Side::a) continue;
+      ++from_sphere;
+      const Eigen::Vector3d u = c.origin / 0.5;
+      EXPECT_NEAR(c.depth, (c.origin.x() - 0.4) / u.x(), 1e-5);
+      EXPECT_NEAR((c.normal - Eigen::Vector3d(-1, 0, 0)).norm(), 0.0, 1e-6);
+    }
+    EXPECT_EQ(from_sphere, expected);
+    for (const Contact& c : res.contacts) EXPECT_EQ(c.source, Side::a) << "box corners lie outside the sphere";
+  }
+}
+
+// A box mesh against a sphere volume: exact intersection as target.
+TEST_P(Conformance, BoxAgainstSphereVolume) {
+  auto r = rig(box_mesh(0.5), std::make_shared<Shape>(Sphere{1.0}));
+  const StepResult res = r.step(Pose{}, at(1.2, 0, 0));
+  // Corners (0.5, ±0.5, ±0.5) are 0.866 from the sphere's centre: inside.
+  size_t from_box = 0;
+  for (const Contact& c : res.contacts) {
+    if (c.source != Side::a) continue;
+    ++from_box;
+    const Eigen::Vector3d exit = c.origin + c.depth * c.direction;
+    EXPECT_NEAR((exit - Eigen::Vector3d(1.2, 0, 0)).norm(), 1.0, 1e-5);
+    EXPECT_NEAR((c.normal - (exit - Eigen::Vector3d(1.2, 0, 0))).norm(), 0.0, 1e-5);
+  }
+  EXPECT_EQ(from_box, 4u);
+}
+
+// A small cube in the opening of a U: its vertices lie inside the bounding-box
+// overlap but outside the U's body, so nothing collides; moved into an arm,
+// all eight collide.
+TEST_P(Conformance, ConcaveOpeningIsNotInside) {
+  auto r = rig(shape(gen::u_shape()), box_mesh(0.3));
+  const StepResult open = r.step(Pose{}, at(0, 0.5, 0));
+  EXPECT_FALSE(open.pairs[0].colliding);
+  EXPECT_GE(open.stats.candidates, 8u);
+  auto r2 = rig(shape(gen::u_shape()), box_mesh(0.3));
+  const StepResult arm = r2.step(Pose{}, at(1.0, 0.5, 0));
+  size_t from_cube = 0;
+  for (const Contact& c : arm.contacts) from_cube += c.source == Side::b;
+  EXPECT_EQ(from_cube, 8u);
+}
+
+TEST_P(Conformance, ProjectedDepthIsDepthTimesCosine) {
+  Config c;
+  c.projected = false;
+  auto r = rig(shape(gen::concave_blob(902, 1)), shape(gen::concave_blob(902, 2)), c);
+  const StepResult res = r.step(Pose{}, at(Eigen::Vector3d(1.1, 0.2, 0.1), Eigen::Quaterniond(0.9, 0.1, 0.3, 0.2)));
+  ASSERT_GT(res.contacts.size(), 10u);
+  for (const Contact& k : res.contacts) {
+    EXPECT_NEAR(k.projected_depth, k.depth * std::abs(k.direction.dot(k.normal)), 1e-12);
+    EXPECT_LE(k.projected_depth, k.depth + 1e-12);
+    EXPECT_NEAR((k.push - k.direction * k.depth).norm(), 0.0, 1e-12);  // projection off: push along the ray
+  }
+}
+
+// Convex pairs: after a motion below displacement_threshold from a full
+// step, the iterative step finds the same penetrating vertices as full.
+TEST_P(Conformance, IterativeMatchesFullAfterSmallMotion) {
+  std::mt19937 g(21);
+  std::uniform_real_distribution<double> u(-1, 1);
+  Config iterative;
+  iterative.mode = Mode::iterative;
+  Config full;
+  full.mode = Mode::full;
+  auto ico = shape(gen::icosphere(0.6, 3));
+  auto box = box_mesh(0.5);
+  size_t compared = 0, contacts = 0;
+  for (int i = 0; i < 40; ++i) {
+    auto a_shape = i % 2 ? box : ico;
+    const Eigen::Quaterniond qa = Eigen::Quaterniond(1, 0.2 * u(g), 0.2 * u(g), 0.2 * u(g)).normalized();
+    const Pose a0 = at(Eigen::Vector3d::Zero(), qa);
+    const Pose b0 = at(Eigen::Vector3d(0.95 + 0.05 * u(g), 0.2 * u(g), 0.2 * u(g)), Eigen::Quaterniond::Identity());
+    // A small motion: 0.01 of translation, well under the 0.05 threshold.
+    const Pose b1 = at(b0.position + 0.01 * Eigen::Vector3d(u(g), u(g), u(g)).normalized(), b0.orientation);
+    auto it = rig(a_shape, ico, iterative);
+    it.step(a0, b0);
+    const StepResult walked = it.step(a0, b1);
+    ASSERT_EQ(walked.pairs[0].mode, PairMode::iterative);
+    auto fu = rig(a_shape, ico, full);
+    const StepResult traced = fu.step(a0, b1);
+    EXPECT_EQ(penetrating(walked), penetrating(traced)) << "case " << i;
+    for (size_t k = 0; k < std::min(walked.contacts.size(), traced.contacts.size()); ++k)
+      if (walked.contacts[k].vertex == traced.contacts[k].vertex)
+        EXPECT_NEAR(walked.contacts[k].depth, traced.contacts[k].depth, 1e-5 * (1 + traced.contacts[k].depth));
+    contacts += traced.contacts.size();
+    ++compared;
+  }
+  EXPECT_EQ(compared, 40u);
+  EXPECT_GT(contacts, 200u);
+}
+
+TEST_P(Conformance, LargeMotionSendsThePairBackToFull) {
+  auto r = rig(box_mesh(0.5), box_mesh(0.6));  // automatic mode, threshold 0.05
+  EXPECT_EQ(r.step(Pose{}, at(1.0, 0, 0)).pairs[0].mode, PairMode::full);
+  const StepResult small = r.step(Pose{}, at(0.98, 0, 0));
+  EXPECT_EQ(small.pairs[0].mode, PairMode::iterative);
+  EXPECT_EQ(small.stats.rays_iterative, 4u);
+  const StepResult large = r.step(Pose{}, at(0.9, 0, 0));  // 0.1 from the last full step
+  EXPECT_EQ(large.pairs[0].mode, PairMode::full);
+  EXPECT_EQ(large.stats.fallbacks_to_full, 1u);
+  // A rotation counts too: 0.04 rad times radius (~1.04) exceeds 0.05.
+  const Pose turned = at(Eigen::Vector3d::Zero(), Eigen::Quaterniond(Eigen::AngleAxisd(0.04, Eigen::Vector3d::UnitZ())));
+  EXPECT_EQ(r.step(turned, at(0.9, 0, 0)).pairs[0].mode, PairMode::full);
+}
+
+// Figure 2.4, first row, fixed: B approaches A; at step 0 (full) nothing
+// touches but A's +x vertices are within distance_extension; at step 1
+// (iterative) they are inside and reported at once through predictive rays.
+// Without predictive rays the same step reports nothing: the delay.
+TEST_P(Conformance, PredictiveRaysCatchNewContactsInIterativeSteps) {
+  for (bool predictive : {true, false}) {
+    Config c;
+    c.predictive = predictive;
+    auto r = rig(box_mesh(0.5), box_mesh(0.5), c);
+    const StepResult s0 = r.step(Pose{}, at(1.03, 0, 0));
+    EXPECT_FALSE(s0.pairs[0].colliding);
+    EXPECT_EQ(s0.predictive.size(), predictive ? 8u : 0u);
+    const StepResult s1 = r.step(Pose{}, at(0.99, 0, 0));  // moved 0.04 < 0.05: iterative
+    ASSERT_EQ(s1.pairs[0].mode, PairMode::iterative);
+    if (predictive) {
+      EXPECT_EQ(s1.contacts.size(), 8u);
+      for (const Contact& k : s1.contacts) EXPECT_NEAR(k.projected_depth, 0.01, 1e-5);
+    } else {
+      EXPECT_EQ(s1.contacts.size(), 0u) << "without predictive rays the contact is delayed";
+    }
+  }
+}
+
+TEST_P(Conformance, PairAbsentFromAStepIsEvicted) {
+  auto r = rig(box_mesh(0.5), box_mesh(0.6));
+  r.step(Pose{}, at(1.0, 0, 0));
+  r.narrow->detect({});  // the pair left the broad phase
+  const StepResult back = r.step(Pose{}, at(1.0, 0, 0));
+  EXPECT_EQ(back.pairs[0].mode, PairMode::full) << "a returning pair starts afresh";
+}
+
+TEST_P(Conformance, BadCallsAreUsageErrors) {
+  auto r = rig(box_mesh(0.5), box_mesh(0.6));
+  const BodyPair self{r.a, r.a}, unknown{r.a, 99};
+  EXPECT_THROW(r.narrow->detect(std::span(&self, 1)), UsageError);
+  EXPECT_THROW(r.narrow->detect(std::span(&unknown, 1)), UsageError);
+  const BodyPair twice[2] = {{r.a, r.b}, {r.b, r.a}};
+  EXPECT_THROW(r.narrow->detect(twice), UsageError);
+  Pose bad;
+  bad.orientation = Eigen::Quaterniond(2, 0, 0, 0);
+  EXPECT_THROW(r.narrow->set_pose(r.a, bad), UsageError);
+}
+
+// Same penetrating vertices, same triangles, depths within 1e-5 relative as
+// the basic traversal, on concave pairs, in full and in iterative steps.
+TEST_P(Conformance, AgreesWithBasic) {
+  auto blob_a = shape(gen::concave_blob(902, 1));
+  auto blob_b = shape(gen::concave_blob(902, 2));
+  std::mt19937 g(33);
+  std::uniform_real_distribution<double> u(-1, 1);
+  size_t contacts = 0;
+  for (int i = 0; i < 20; ++i) {
+    const Pose a = at(Eigen::Vector3d(u(g), u(g), u(g)), Eigen::Quaterniond(1, u(g), u(g), u(g)));
+    const Pose b = at(a.position + 1.3 * Eigen::Vector3d(u(g), u(g), u(g)).normalized(),
+                      Eigen::Quaterniond(1, u(g), u(g), u(g)));
+    const Pose b1 = at(b.position + Eigen::Vector3d(0.01, -0.01, 0.005), b.orientation);
+    PairRig mine(GetParam(), blob_a, blob_b), reference("basic", blob_a, blob_b);
+    for (const Pose& pb : {b, b1}) {
+      const StepResult x = mine.step(a, pb), y = reference.step(a, pb);
+      ASSERT_EQ(x.pairs[0].mode, y.pairs[0].mode);
+      ASSERT_EQ(x.contacts.size(), y.contacts.size()) << "case " << i;
+      for (size_t k = 0; k < x.contacts.size(); ++k) {
+        EXPECT_EQ(x.contacts[k].source, y.contacts[k].source);
+        EXPECT_EQ(x.contacts[k].vertex, y.contacts[k].vertex);
+        EXPECT_EQ(x.contacts[k].triangle, y.contacts[k].triangle) << "case " << i << " vertex " << x.contacts[k].vertex;
+        EXPECT_NEAR(x.contacts[k].depth, y.contacts[k].depth, 1e-5 * std::max(1e-3, y.contacts[k].depth));
+      }
+      EXPECT_EQ(x.predictive.size(), y.predictive.size());
+      contacts += x.contacts.size();
+    }
+  }
+  EXPECT_GT(contacts, 500u) << "too few contacts: the comparison would be vacuous";
+}
+
+TEST_P(Conformance, SameContactsBitForBitAcrossThreadCounts) {
+  auto blob = shape(gen::concave_blob(902, 1));
+  auto run = [&] {
+    PairRig r(GetParam(), blob, blob);
+    return r.step(Pose{}, at(Eigen::Vector3d(0.9, 0.3, 0.2), Eigen::Quaterniond(0.8, 0.3, 0.1, 0.4)));
+  };
+  const StepResult many = run();
+  StepResult one;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    one = run();
+  }
+  ASSERT_EQ(many.contacts.size(), one.contacts.size());
+  ASSERT_GT(many.contacts.size(), 0u);
+  for (size_t k = 0; k < many.contacts.size(); ++k) {
+    EXPECT_EQ(many.contacts[k].vertex, one.contacts[k].vertex);
+    EXPECT_EQ(many.contacts[k].depth, one.contacts[k].depth);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(usable_backends()),
+                         [](const auto& info) { return info.param; });
+
+TEST(Registry, UnknownBackendListsWhatIsAvailable) {
+  try {
+    make_narrow_phase("warp-drive");
+    ADD_FAILURE();
+  } catch (const BackendError& e) {
+    EXPECT_NE(std::string(e.what()).find("warp-drive"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("basic"), std::string::npos);
+  }
+}
+
+TEST(Registry, AutoPicksAUsableBackendAndSaysWhich) {
+  auto n = make_narrow_phase("auto");
+  EXPECT_NE(n->name(), "auto");
+  EXPECT_FALSE(n->devices().empty());
+}
+
+TEST(Registry, BadConfigIsRejected) {
+  Config c;
+  c.displacement_threshold = 1.0;
+  EXPECT_THROW(make_narrow_phase("basic", c), ConfigError);
+}
+
+}  // namespace
+}  // namespace rtcd::test

@@ -1,0 +1,114 @@
+// The shared kernel's ray/triangle location: facing, edge choice, watertightness.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "rtcd/kernel/locate.h"
+#include "rtcd/kernel/volumes.h"
+#include "rtcd/mesh_gen.hpp"
+
+namespace {
+
+rtcd_vec3 k(const Eigen::Vector3f& v) { return rtcd_v3(v.x(), v.y(), v.z()); }
+Eigen::Vector3f random_unit(std::mt19937& g) {
+  std::normal_distribution<float> n;
+  return Eigen::Vector3f(n(g), n(g), n(g)).normalized();
+}
+
+TEST(Locate, FacingIsTheSignOfDirectionDotNormalForEveryDominantAxis) {
+  std::mt19937 g(7);
+  std::uniform_real_distribution<float> u(-1, 1);
+  int checked = 0;
+  for (int i = 0; i < 2000; ++i) {
+    const Eigen::Vector3f a(u(g), u(g), u(g)), b(u(g), u(g), u(g)), c(u(g), u(g), u(g));
+    const Eigen::Vector3f d = random_unit(g);
+    const float dn = d.dot((b - a).cross(c - a));
+    if (std::abs(dn) < 1e-3f) continue;
+    const rtcd_ray ray = rtcd_make_ray(rtcd_v3(0, 0, 0), k(d));
+    const rtcd_location loc = rtcd_locate(&ray, k(a), k(b), k(c));
+    EXPECT_EQ(loc.facing, dn > 0 ? 1 : -1) << "i=" << i;
+    ++checked;
+  }
+  EXPECT_GT(checked, 1500);
+}
+
+TEST(Locate, DistanceAndInsideMatchAHandComputedCase) {
+  // Triangle in the plane z = 2, normal +z; the ray leaves through it.
+  const rtcd_ray ray = rtcd_make_ray(rtcd_v3(0.2f, 0.2f, 0), rtcd_v3(0, 0, 1));
+  const rtcd_location loc = rtcd_locate(&ray, rtcd_v3(0, 0, 2), rtcd_v3(1, 0, 2), rtcd_v3(0, 1, 2));
+  ASSERT_TRUE(loc.inside);
+  EXPECT_EQ(loc.facing, 1);
+  EXPECT_FLOAT_EQ(loc.t_num / loc.det, 2.0f);
+}
+
+TEST(Locate, EdgeChoiceFollowsAlgorithm2) {
+  // v0 = (0,0), v1 = (1,0), v2 = (0,1) in z = 1; points beyond each edge.
+  const rtcd_vec3 v0 = rtcd_v3(0, 0, 1), v1 = rtcd_v3(1, 0, 1), v2 = rtcd_v3(0, 1, 1);
+  auto edge_for = [&](float x, float y) {
+    const rtcd_ray ray = rtcd_make_ray(rtcd_v3(x, y, 0), rtcd_v3(0, 0, 1));
+    return rtcd_locate(&ray, v0, v1, v2).edge;
+  };
+  EXPECT_EQ(edge_for(0.3f, -0.2f), 1);  // v < 0: beyond (v0, v1)
+  EXPECT_EQ(edge_for(-0.2f, 0.3f), 0);  // u < 0: beyond (v2, v0)
+  EXPECT_EQ(edge_for(0.8f, 0.8f), 2);   // u + v > 1: beyond (v1, v2)
+  EXPECT_EQ(edge_for(-0.5f, -0.5f), 0); // both u and v < 0: Algorithm 2 tests u first
+  EXPECT_EQ(edge_for(0.2f, 0.2f), -1);  // inside
+}
+
+// Rays aimed exactly at points of a shared edge, or at a shared vertex, of a
+// closed mesh: some triangle always takes the ray (no gap).
+TEST(Locate, NoGapAtSharedEdgesAndVertices) {
+  const rtcd::Mesh mesh = rtcd::gen::icosphere(1.0, 2);
+  std::mt19937 g(11);
+  std::uniform_real_distribution<float> u(0, 1);
+  int gaps = 0, rays = 0;
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    for (int e = 0; e < 3; ++e) {
+      const int32_t n = mesh.neighbors()[t][e];
+      const auto& tri = mesh.triangles()[t];
+      const Eigen::Vector3f a = mesh.positions()[tri[(e + 2) % 3]], b = mesh.positions()[tri[e]];
+      for (int s = 0; s < 4; ++s) {
+        const float w = s == 0 ? 0.0f : u(g);  // w = 0: through the shared vertex
+        const Eigen::Vector3f target = a + w * (b - a);
+        const Eigen::Vector3f d = random_unit(g);
+        const Eigen::Vector3f origin = target - 0.5f * d;
+        const rtcd_ray ray = rtcd_make_ray(k(origin), k(d));
+        bool taken = false;
+        // The two triangles of the edge, and for a vertex its whole fan.
+        for (size_t f = 0; f < mesh.triangle_count() && !taken; ++f) {
+          const auto& ft = mesh.triangles()[f];
+          const bool holds = (w == 0.0f) ? (ft[0] == tri[(e + 2) % 3] || ft[1] == tri[(e + 2) % 3] ||
+                                            ft[2] == tri[(e + 2) % 3])
+                                         : (int32_t(f) == n || f == t);
+          if (!holds) continue;
+          const rtcd_location loc =
+              rtcd_locate(&ray, k(mesh.positions()[ft[0]]), k(mesh.positions()[ft[1]]), k(mesh.positions()[ft[2]]));
+          taken = loc.inside;
+        }
+        ++rays;
+        if (!taken) ++gaps;
+      }
+    }
+  }
+  EXPECT_EQ(gaps, 0) << "of " << rays << " rays";
+}
+
+TEST(Volumes, SphereAndBoxStatuses) {
+  const rtcd_vec3 x = rtcd_v3(1, 0, 0);
+  rtcd_volume_hit h = rtcd_sphere_line(rtcd_v3(0.5f, 0, 0), x, 1.0f);
+  EXPECT_EQ(h.status, RTCD_LINE_HIT);
+  EXPECT_FLOAT_EQ(h.t, 0.5f);
+  h = rtcd_sphere_line(rtcd_v3(-3, 0, 0), x, 1.0f);
+  EXPECT_EQ(h.status, RTCD_LINE_FRONT);
+  h = rtcd_sphere_line(rtcd_v3(1.5f, 0, 0), x, 1.0f);
+  EXPECT_EQ(h.status, RTCD_LINE_BEHIND);
+  EXPECT_FLOAT_EQ(h.t, -0.5f);
+  EXPECT_EQ(rtcd_sphere_line(rtcd_v3(0, 2, 0), x, 1.0f).status, RTCD_LINE_MISS);
+  h = rtcd_box_line(rtcd_v3(0.2f, 0.1f, 0), rtcd_v3(0, -1, 0), rtcd_v3(0.5f, 0.5f, 0.5f));
+  EXPECT_EQ(h.status, RTCD_LINE_HIT);
+  EXPECT_EQ(h.face, 3);  // -y
+  EXPECT_FLOAT_EQ(h.t, 0.6f);
+  EXPECT_EQ(rtcd_box_line(rtcd_v3(0, 0.7f, 0), x, rtcd_v3(0.5f, 0.5f, 0.5f)).status, RTCD_LINE_MISS);
+}
+
+}  // namespace

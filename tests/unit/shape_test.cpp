@@ -1,0 +1,53 @@
+// Ray sources of shapes: mesh vertices, icosphere and box corners, sampling.
+#include <numbers>
+
+#include <gtest/gtest.h>
+
+#include "rtcd/error.hpp"
+#include "rtcd/mesh_gen.hpp"
+#include "rtcd/shape.hpp"
+
+namespace {
+
+TEST(Shape, MeshCastsFromVerticesAlongInwardNormals) {
+  const rtcd::Shape s(rtcd::gen::icosphere(2.0, 1));
+  ASSERT_EQ(s.sources().origins.size(), 42u);
+  for (size_t i = 0; i < 42; ++i)
+    EXPECT_NEAR((s.sources().directions[i] + s.sources().origins[i].normalized()).norm(), 0.0f, 1e-5f);
+  EXPECT_NEAR(s.radius(), 2.0, 1e-6);
+}
+
+TEST(Shape, SphereCastsFromALevel2Icosphere) {
+  const rtcd::Shape s(rtcd::Sphere{0.5});
+  ASSERT_EQ(s.sources().origins.size(), 162u);
+  for (size_t i = 0; i < 162; ++i) {
+    EXPECT_NEAR(s.sources().origins[i].norm(), 0.5f, 1e-6f);
+    EXPECT_NEAR((s.sources().directions[i] + 2.0f * s.sources().origins[i]).norm(), 0.0f, 1e-5f);
+  }
+}
+
+TEST(Shape, BoxCastsFromCornersAlongDiagonals) {
+  const rtcd::Shape s(rtcd::Box{{1, 2, 3}});
+  ASSERT_EQ(s.sources().origins.size(), 8u);
+  for (size_t i = 0; i < 8; ++i) {
+    const Eigen::Vector3f sign = s.sources().origins[i].cwiseQuotient(Eigen::Vector3f(1, 2, 3));
+    EXPECT_NEAR((s.sources().directions[i] + sign / std::sqrt(3.0f)).norm(), 0.0f, 1e-6f);
+  }
+}
+
+TEST(Shape, SamplingAddsOriginsPerUnitArea) {
+  const rtcd::Shape box(rtcd::Box{{0.5, 0.5, 0.5}}, 100.0);  // area 6: about 600 more
+  EXPECT_EQ(box.sources().origins.size(), 8u + 600u);
+  const rtcd::Shape sphere(rtcd::Sphere{1.0}, 10.0);  // area 4 pi: about 126 more
+  EXPECT_EQ(sphere.sources().origins.size(), 162u + 126u);
+  for (size_t i = 162; i < sphere.sources().origins.size(); ++i)
+    EXPECT_NEAR(sphere.sources().origins[i].norm(), 1.0f, 1e-5f);
+}
+
+TEST(Shape, BadVolumesAreRejected) {
+  EXPECT_THROW(rtcd::Shape(rtcd::Sphere{-1.0}), rtcd::UsageError);
+  EXPECT_THROW(rtcd::Shape(rtcd::Box{{1, 0, 1}}), rtcd::UsageError);
+  EXPECT_THROW(rtcd::Shape(rtcd::Sphere{1.0}, -5.0), rtcd::UsageError);
+}
+
+}  // namespace
