@@ -22,7 +22,6 @@ static_assert(sizeof(Eigen::Vector3f) == sizeof(rtcd_vec3), "positions are hande
 static_assert(sizeof(Mesh::Triangle) == 3 * sizeof(rtcd_uint) && sizeof(Mesh::Neighbors) == 3 * sizeof(rtcd_int));
 
 rtcd_vec3 to_kernel(const Eigen::Vector3f& v) { return rtcd_v3(v.x(), v.y(), v.z()); }
-Eigen::Vector3d to_eigen(rtcd_vec3 v) { return {v.x, v.y, v.z}; }
 
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point start) {
@@ -44,9 +43,21 @@ struct Outcome {
   uint32_t vertex;
   int32_t triangle;
   int kind;  // rtcd_ray_kind
-  float t;
-  rtcd_vec3 origin, direction;
+  double t;
+  Eigen::Vector3d origin, direction;
 };
+
+// Distance along the ray to the plane of the triangle the tracer or walk
+// chose, in double precision: depths then agree across backends (and with
+// the exact reference) to far better than float.
+double refined_distance(const Mesh& mesh, int32_t triangle, const Eigen::Vector3d& origin,
+                        const Eigen::Vector3d& direction) {
+  const auto& tri = mesh.triangles()[triangle];
+  const Eigen::Vector3d a = mesh.positions()[tri[0]].cast<double>();
+  const Eigen::Vector3d n =
+      (mesh.positions()[tri[1]].cast<double>() - a).cross(mesh.positions()[tri[2]].cast<double>() - a);
+  return n.dot(a - origin) / n.dot(direction);
+}
 
 struct JobStats {
   size_t candidates = 0, rays_full = 0, rays_predictive = 0, rays_iterative = 0, walk_steps = 0;
@@ -235,14 +246,14 @@ void CpuNarrowPhase::run(Job& job) const {
   const Eigen::Matrix3d rotation = to_target.orientation.toRotationMatrix();
 
   // Candidate rays: all origins in a full step, last step's tracked rays in an iterative one.
-  const size_t count = job.iterative ? job.tracked->size() : rs.origins.size();
-  const size_t chunks = (count + kChunk - 1) / kChunk;
-  std::vector<std::vector<Outcome>> per_chunk(chunks);
-  std::vector<JobStats> chunk_stats(chunks);
   if (overlap.empty()) {
     job.tracked->clear();
     return;
   }
+  const size_t count = job.iterative ? job.tracked->size() : rs.origins.size();
+  const size_t chunks = (count + kChunk - 1) / kChunk;
+  std::vector<std::vector<Outcome>> per_chunk(chunks);
+  std::vector<JobStats> chunk_stats(chunks);
   tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
     for (size_t k = c * kChunk; k < std::min(count, (c + 1) * kChunk); ++k) {
       const uint32_t vertex = job.iterative ? (*job.tracked)[k].vertex : uint32_t(k);
@@ -252,10 +263,18 @@ void CpuNarrowPhase::run(Job& job) const {
       if (!overlap.contains(p)) continue;
       ++chunk_stats[c].candidates;
       const Eigen::Vector3d d = rotation * rs.directions[vertex].cast<double>();
-      const Outcome o = trace_one(*target.shape, target.tracer.get(), vertex, start,
-                                  rtcd_v3(float(p.x()), float(p.y()), float(p.z())),
-                                  rtcd_v3(float(d.x()), float(d.y()), float(d.z())), job.iterative, chunk_stats[c]);
-      if (o.kind != RTCD_RAY_DROPPED) per_chunk[c].push_back(o);
+      Outcome o = trace_one(*target.shape, target.tracer.get(), vertex, start,
+                            rtcd_v3(float(p.x()), float(p.y()), float(p.z())),
+                            rtcd_v3(float(d.x()), float(d.y()), float(d.z())), job.iterative, chunk_stats[c]);
+      if (o.kind == RTCD_RAY_DROPPED) continue;
+      o.origin = p;
+      o.direction = d;
+      if (const Mesh* mesh = target.shape->mesh()) {
+        // Keep the kernel's decision; only sharpen the distance.
+        const double t = refined_distance(*mesh, o.triangle, p, d);
+        o.t = o.kind == RTCD_RAY_PENETRATING ? std::max(t, 0.0) : std::min(t, 0.0);
+      }
+      per_chunk[c].push_back(o);
     }
   });
   job.tracked->clear();
@@ -270,7 +289,7 @@ void CpuNarrowPhase::run(Job& job) const {
 
 Outcome CpuNarrowPhase::trace_one(const Shape& target, const MeshTracer* tracer, uint32_t vertex, int32_t start,
                                   rtcd_vec3 origin, rtcd_vec3 direction, bool iterative, JobStats& stats) const {
-  Outcome o{vertex, -1, RTCD_RAY_DROPPED, 0.0f, origin, direction};
+  Outcome o{vertex, -1, RTCD_RAY_DROPPED, 0.0, {}, {}};
   const float extension = float(config_.distance_extension);
   int status = RTCD_LINE_MISS;
   float t = 0.0f;
@@ -338,7 +357,7 @@ void CpuNarrowPhase::gather(const Job& job, StepResult& out, bool is_a) const {
     if (const Mesh* m = target.mesh()) {
       local_normal = m->triangle_normals()[o.triangle].cast<double>();
     } else if (std::holds_alternative<Sphere>(target.geometry())) {
-      local_normal = (to_eigen(o.origin) + double(o.t) * to_eigen(o.direction)).normalized();
+      local_normal = (o.origin + o.t * o.direction).normalized();
     } else {
       local_normal = Eigen::Vector3d::Zero();
       local_normal[o.triangle / 2] = o.triangle % 2 == 0 ? 1.0 : -1.0;

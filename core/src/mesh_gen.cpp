@@ -22,7 +22,9 @@ double unit(std::mt19937& g) { return g() / 4294967296.0; }
 Mesh make(const std::vector<Eigen::Vector3d>& p, const std::vector<Tri>& t) {
   std::vector<Eigen::Vector3f> pf;
   pf.reserve(p.size());
-  for (const auto& v : p) pf.push_back(v.cast<float>());
+  // Coordinates that are zero up to rounding (cos(pi / 2)) are stored as
+  // zero: they then round-trip through any text format.
+  for (const auto& v : p) pf.push_back(v.unaryExpr([](double c) { return std::abs(c) < 1e-12 ? 0.0 : c; }).cast<float>());
   return in_first_use_order(pf, t);
 }
 
@@ -197,8 +199,11 @@ Mesh concave_blob(int triangles, uint32_t seed, double radius) {
   for (int i = 0; i < 7; ++i) {
     const double z = 2 * unit(rng) - 1, phi = 2 * pi * unit(rng);
     const double s = std::sqrt(1 - z * z);
-    const double amplitude = i % 2 == 0 ? -0.25 - 0.15 * unit(rng) : 0.15 + 0.15 * unit(rng);
-    bumps.push_back({{s * std::cos(phi), s * std::sin(phi), z}, amplitude, 0.45 + 0.15 * unit(rng)});
+    // Dents narrower than the body's curvature make it concave.
+    const bool dent = i % 2 == 0;
+    const double amplitude = dent ? -0.35 - 0.15 * unit(rng) : 0.15 + 0.15 * unit(rng);
+    const double width = dent ? 0.35 + 0.1 * unit(rng) : 0.45 + 0.15 * unit(rng);
+    bumps.push_back({{s * std::cos(phi), s * std::sin(phi), z}, amplitude, width});
   }
   for (auto& v : p) {
     double r = 1.0;

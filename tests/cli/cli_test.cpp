@@ -79,20 +79,20 @@ class CliFiles : public ::testing::Test {
 };
 
 // The pair state carries across a sequence: the second step is iterative and
-// predictive rays catch the new contacts (B approaching A).
+// predictive rays catch the new contacts (B approaching A, as in Figure 2.4).
 TEST_F(CliFiles, SequenceCarriesPairState) {
-  const std::string seq = write("seq.json", R"([{"pose_a": [0,0,0,1,0,0,0], "pose_b": [1.03,0,0,1,0,0,0]},
-                                                 {"pose_a": [0,0,0,1,0,0,0], "pose_b": [0.99,0,0,1,0,0,0]}])");
-  const Outcome r = run("query " + data + "box.obj " + data + "box.obj --sequence " + seq + " --json");
+  const std::string seq = write("seq.json", R"([{"pose_a": [0,0,0,1,0,0,0], "pose_b": [1.13,0,0,1,0,0,0]},
+                                                 {"pose_a": [0,0,0,1,0,0,0], "pose_b": [1.09,0,0,1,0,0,0]}])");
+  const Outcome r = run("query " + data + "box.obj box:0.6,0.6,0.6 --sequence " + seq + " --json");
   ASSERT_EQ(r.code, 0) << r.out;
   const auto j = nlohmann::json::parse(r.out);
   ASSERT_EQ(j.size(), 2u);
   EXPECT_EQ(j[0]["mode"], "full");
   EXPECT_FALSE(j[0]["colliding"].get<bool>());
-  EXPECT_EQ(j[0]["predictive"].size(), 8u);
+  EXPECT_EQ(j[0]["predictive"].size(), 4u);
   EXPECT_EQ(j[1]["mode"], "iterative");
-  EXPECT_EQ(j[1]["contacts"].size(), 8u);
-  const Outcome off = run("query " + data + "box.obj " + data + "box.obj --sequence " + seq + " --json --no-predictive");
+  EXPECT_EQ(j[1]["contacts"].size(), 4u);
+  const Outcome off = run("query " + data + "box.obj box:0.6,0.6,0.6 --sequence " + seq + " --json --no-predictive");
   EXPECT_EQ(nlohmann::json::parse(off.out)[1]["contacts"].size(), 0u);
 }
 

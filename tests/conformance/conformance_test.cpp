@@ -25,13 +25,14 @@ std::shared_ptr<const Shape> box_volume(double h) { return std::make_shared<Shap
 
 // Cube A (half 0.5) at the origin, cube B (half 0.6) at (1, 0, 0): exactly
 // A's four +x vertices penetrate, along -(1, ±1, ±1)/√3, to B's face x = 0.4.
-void expect_cube_contacts(const StepResult& r) {
+void expect_cube_contacts(const StepResult& r, const Eigen::Vector3d& a_position = Eigen::Vector3d::Zero()) {
   ASSERT_EQ(r.contacts.size(), 4u);
   for (const Contact& c : r.contacts) {
     EXPECT_EQ(c.source, Side::a);
-    EXPECT_NEAR(c.origin.x(), 0.5, 1e-7);
-    EXPECT_NEAR(std::abs(c.origin.y()), 0.5, 1e-7);
-    const Eigen::Vector3d inward = -Eigen::Vector3d(1, c.origin.y() > 0 ? 1 : -1, c.origin.z() > 0 ? 1 : -1) / std::sqrt(3.0);
+    const Eigen::Vector3d local = c.origin - a_position;
+    EXPECT_NEAR(local.x(), 0.5, 1e-7);
+    EXPECT_NEAR(std::abs(local.y()), 0.5, 1e-7);
+    const Eigen::Vector3d inward = -Eigen::Vector3d(1, local.y() > 0 ? 1 : -1, local.z() > 0 ? 1 : -1) / std::sqrt(3.0);
     EXPECT_NEAR((c.direction - inward).norm(), 0.0, 1e-6);
     EXPECT_NEAR(c.depth, 0.1 * std::sqrt(3.0), 1e-6);
     EXPECT_NEAR(c.projected_depth, 0.1, 1e-6);
@@ -62,7 +63,7 @@ TEST_P(Conformance, CubesMixed) {
 
 TEST_P(Conformance, CubesFarFromTheOrigin) {
   auto r = rig(box_mesh(0.5), box_mesh(0.6));
-  expect_cube_contacts(r.step(at(148376, 1234, -223423), at(148377, 1234, -223423)));
+  expect_cube_contacts(r.step(at(148376, 1234, -223423), at(148377, 1234, -223423)), {148376, 1234, -223423});
 }
 
 // A sphere of radius 0.5 at the origin against a box (half 0.5) at (0.9, 0, 0):
@@ -108,12 +109,12 @@ TEST_P(Conformance, BoxAgainstSphereVolume) {
 // overlap but outside the U's body, so nothing collides; moved into an arm,
 // all eight collide.
 TEST_P(Conformance, ConcaveOpeningIsNotInside) {
-  auto r = rig(shape(gen::u_shape()), box_mesh(0.3));
-  const StepResult open = r.step(Pose{}, at(0, 0.5, 0));
+  auto r = rig(shape(gen::u_shape()), box_mesh(0.25));
+  const StepResult open = r.step(Pose{}, at(0.05, 0.5, 0.1));
   EXPECT_FALSE(open.pairs[0].colliding);
   EXPECT_GE(open.stats.candidates, 8u);
-  auto r2 = rig(shape(gen::u_shape()), box_mesh(0.3));
-  const StepResult arm = r2.step(Pose{}, at(1.0, 0.5, 0));
+  auto r2 = rig(shape(gen::u_shape()), box_mesh(0.25));
+  const StepResult arm = r2.step(Pose{}, at(1.0, 0.5, 0.1));
   size_t from_cube = 0;
   for (const Contact& c : arm.contacts) from_cube += c.source == Side::b;
   EXPECT_EQ(from_cube, 8u);
@@ -132,7 +133,8 @@ TEST_P(Conformance, ProjectedDepthIsDepthTimesCosine) {
   }
 }
 
-// Convex pairs: after a motion below displacement_threshold from a full
+// Convex pairs in shallow contact (the small intersection volumes of
+// section 2.1.5): after a motion below displacement_threshold from a full
 // step, the iterative step finds the same penetrating vertices as full.
 TEST_P(Conformance, IterativeMatchesFullAfterSmallMotion) {
   std::mt19937 g(21);
@@ -143,29 +145,30 @@ TEST_P(Conformance, IterativeMatchesFullAfterSmallMotion) {
   full.mode = Mode::full;
   auto ico = shape(gen::icosphere(0.6, 3));
   auto box = box_mesh(0.5);
-  size_t compared = 0, contacts = 0;
+  size_t contacts = 0;
   for (int i = 0; i < 40; ++i) {
-    auto a_shape = i % 2 ? box : ico;
-    const Eigen::Quaterniond qa = Eigen::Quaterniond(1, 0.2 * u(g), 0.2 * u(g), 0.2 * u(g)).normalized();
-    const Pose a0 = at(Eigen::Vector3d::Zero(), qa);
-    const Pose b0 = at(Eigen::Vector3d(0.95 + 0.05 * u(g), 0.2 * u(g), 0.2 * u(g)), Eigen::Quaterniond::Identity());
-    // A small motion: 0.01 of translation, well under the 0.05 threshold.
+    const bool use_box = i % 2 == 1;
+    // B's icosphere overlaps A's face or sphere by 0.01 to 0.05.
+    const Eigen::Vector3d dir = use_box ? Eigen::Vector3d::UnitX() : Eigen::Vector3d(u(g), u(g), u(g)).normalized();
+    const Eigen::Vector3d offset = use_box ? Eigen::Vector3d(0, 0.3 * u(g), 0.3 * u(g)) : Eigen::Vector3d::Zero();
+    const double reach = use_box ? 0.5 : 0.6;
+    const Eigen::Vector3d center = offset + (reach + 0.6 - (0.03 + 0.02 * u(g))) * dir;
+    const Pose b0 = at(center, Eigen::Quaterniond(1, 0.3 * u(g), 0.3 * u(g), 0.3 * u(g)));
+    // A small motion: 0.01 of translation, under the 0.05 threshold.
     const Pose b1 = at(b0.position + 0.01 * Eigen::Vector3d(u(g), u(g), u(g)).normalized(), b0.orientation);
-    auto it = rig(a_shape, ico, iterative);
-    it.step(a0, b0);
-    const StepResult walked = it.step(a0, b1);
+    auto it = rig(use_box ? box : ico, ico, iterative);
+    it.step(Pose{}, b0);
+    const StepResult walked = it.step(Pose{}, b1);
     ASSERT_EQ(walked.pairs[0].mode, PairMode::iterative);
-    auto fu = rig(a_shape, ico, full);
-    const StepResult traced = fu.step(a0, b1);
+    auto fu = rig(use_box ? box : ico, ico, full);
+    const StepResult traced = fu.step(Pose{}, b1);
     EXPECT_EQ(penetrating(walked), penetrating(traced)) << "case " << i;
-    for (size_t k = 0; k < std::min(walked.contacts.size(), traced.contacts.size()); ++k)
-      if (walked.contacts[k].vertex == traced.contacts[k].vertex)
-        EXPECT_NEAR(walked.contacts[k].depth, traced.contacts[k].depth, 1e-5 * (1 + traced.contacts[k].depth));
+    if (penetrating(walked) == penetrating(traced))
+      for (size_t k = 0; k < traced.contacts.size(); ++k)
+        EXPECT_NEAR(walked.contacts[k].depth, traced.contacts[k].depth, 1e-9);
     contacts += traced.contacts.size();
-    ++compared;
   }
-  EXPECT_EQ(compared, 40u);
-  EXPECT_GT(contacts, 200u);
+  EXPECT_GT(contacts, 100u);
 }
 
 TEST_P(Conformance, LargeMotionSendsThePairBackToFull) {
@@ -177,28 +180,30 @@ TEST_P(Conformance, LargeMotionSendsThePairBackToFull) {
   const StepResult large = r.step(Pose{}, at(0.9, 0, 0));  // 0.1 from the last full step
   EXPECT_EQ(large.pairs[0].mode, PairMode::full);
   EXPECT_EQ(large.stats.fallbacks_to_full, 1u);
-  // A rotation counts too: 0.04 rad times radius (~1.04) exceeds 0.05.
-  const Pose turned = at(Eigen::Vector3d::Zero(), Eigen::Quaterniond(Eigen::AngleAxisd(0.04, Eigen::Vector3d::UnitZ())));
+  // A rotation counts too: 0.06 rad times the larger radius (~1.04) exceeds 0.05.
+  const Pose turned = at(Eigen::Vector3d::Zero(), Eigen::Quaterniond(Eigen::AngleAxisd(0.06, Eigen::Vector3d::UnitZ())));
   EXPECT_EQ(r.step(turned, at(0.9, 0, 0)).pairs[0].mode, PairMode::full);
 }
 
-// Figure 2.4, first row, fixed: B approaches A; at step 0 (full) nothing
-// touches but A's +x vertices are within distance_extension; at step 1
-// (iterative) they are inside and reported at once through predictive rays.
-// Without predictive rays the same step reports nothing: the delay.
+// Figure 2.4, first row, fixed: B (half 0.6) approaches A (half 0.5); at
+// step 0 (full) nothing touches but A's +x vertices are 0.03 from B's face,
+// within distance_extension; at step 1 (iterative, B moved 0.04) they are
+// 0.01 inside and reported at once through predictive rays. Without
+// predictive rays the same step reports nothing: the delay.
 TEST_P(Conformance, PredictiveRaysCatchNewContactsInIterativeSteps) {
   for (bool predictive : {true, false}) {
     Config c;
     c.predictive = predictive;
-    auto r = rig(box_mesh(0.5), box_mesh(0.5), c);
-    const StepResult s0 = r.step(Pose{}, at(1.03, 0, 0));
+    auto r = rig(box_mesh(0.5), box_mesh(0.6), c);
+    const StepResult s0 = r.step(Pose{}, at(1.13, 0, 0));
     EXPECT_FALSE(s0.pairs[0].colliding);
-    EXPECT_EQ(s0.predictive.size(), predictive ? 8u : 0u);
-    const StepResult s1 = r.step(Pose{}, at(0.99, 0, 0));  // moved 0.04 < 0.05: iterative
+    EXPECT_EQ(s0.predictive.size(), predictive ? 4u : 0u);
+    for (const PredictiveRay& p : s0.predictive) EXPECT_NEAR(p.distance, 0.03 * std::sqrt(3.0), 1e-6);
+    const StepResult s1 = r.step(Pose{}, at(1.09, 0, 0));
     ASSERT_EQ(s1.pairs[0].mode, PairMode::iterative);
     if (predictive) {
-      EXPECT_EQ(s1.contacts.size(), 8u);
-      for (const Contact& k : s1.contacts) EXPECT_NEAR(k.projected_depth, 0.01, 1e-5);
+      ASSERT_EQ(s1.contacts.size(), 4u);
+      for (const Contact& k : s1.contacts) EXPECT_NEAR(k.projected_depth, 0.01, 1e-6);
     } else {
       EXPECT_EQ(s1.contacts.size(), 0u) << "without predictive rays the contact is delayed";
     }
