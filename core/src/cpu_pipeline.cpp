@@ -105,7 +105,8 @@ class CpuNarrowPhase final : public NarrowPhase {
 
   void set_pose(BodyId body, const Pose& pose) override { body_at(body).pose = checked(pose); }
 
-  StepResult detect(std::span<const BodyPair> pairs) override;
+  using NarrowPhase::detect;
+  void detect(std::span<const BodyPair> pairs, StepResult& out) override;
 
  private:
   struct ShapeEntry {
@@ -149,9 +150,12 @@ class CpuNarrowPhase final : public NarrowPhase {
   std::unordered_map<uint64_t, PairState> states_;
 };
 
-StepResult CpuNarrowPhase::detect(std::span<const BodyPair> pairs) {
-  StepResult out;
+void CpuNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& out) {
   auto t0 = Clock::now();
+  out.pairs.clear();
+  out.contacts.clear();
+  out.predictive.clear();
+  out.stats = {};
 
   // Prepare: validate, evict absent pairs, choose full or iterative per pair.
   std::unordered_set<uint64_t> seen;
@@ -227,7 +231,6 @@ StepResult CpuNarrowPhase::detect(std::span<const BodyPair> pairs) {
   out.stats.walk_steps = total.walk_steps;
   out.stats.walk_endings = total.endings;
   out.stats.seconds_gather = seconds_since(t);
-  return out;
 }
 
 void CpuNarrowPhase::run(Job& job) const {

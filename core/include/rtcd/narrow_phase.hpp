@@ -34,7 +34,13 @@ class NarrowPhase {
 
   // One step over the broad phase's candidate pairs. Pair state carries
   // from one call to the next; a pair absent from `pairs` is evicted.
-  virtual StepResult detect(std::span<const BodyPair> pairs) = 0;
+  // `out` is overwritten; reusing it across steps keeps its buffers.
+  virtual void detect(std::span<const BodyPair> pairs, StepResult& out) = 0;
+  StepResult detect(std::span<const BodyPair> pairs) {
+    StepResult out;
+    detect(pairs, out);
+    return out;
+  }
 
  protected:
   explicit NarrowPhase(Config config) : config_(config) { config_.validate(); }
