@@ -66,19 +66,23 @@ void print_table(std::ostream& out, const StepResult& step) {
                 pair.colliding ? "yes" : "no", to_string(pair.mode), pair.contact_count, pair.max_depth,
                 pair.predictive_count);
   out << line;
-  auto row = [&](const RayRecord& r, double value, double projected) {
-    std::snprintf(line, sizeof line, "  %-3s %6u %8d %11.6g %11.6g  (%9.4f %9.4f %9.4f)  (%7.4f %7.4f %7.4f)\n",
+  auto row = [&](const RayRecord& r, double value, const char* projected) {
+    std::snprintf(line, sizeof line, "  %-3s %6u %8d %11.6g %11s  (%9.4f %9.4f %9.4f)  (%7.4f %7.4f %7.4f)\n",
                   r.source == Side::a ? "a" : "b", r.vertex, r.triangle, value, projected, r.origin.x(),
                   r.origin.y(), r.origin.z(), r.normal.x(), r.normal.y(), r.normal.z());
     out << line;
   };
+  char projected[32];
   if (pair.contact_count > 0) {
     out << "  src vertex triangle       depth   projected  origin                           normal\n";
-    for (const Contact& c : step.contacts_of(pair)) row(c, c.depth, c.projected_depth);
+    for (const Contact& c : step.contacts_of(pair)) {
+      std::snprintf(projected, sizeof projected, "%.6g", c.projected_depth);
+      row(c, c.depth, projected);
+    }
   }
   if (pair.predictive_count > 0) {
     out << "  predictive rays:\n  src vertex triangle    distance           -  origin                           normal\n";
-    for (const PredictiveRay& p : step.predictive_of(pair)) row(p, p.distance, 0.0);
+    for (const PredictiveRay& p : step.predictive_of(pair)) row(p, p.distance, "-");
   }
   const StepStats& s = step.stats;
   std::snprintf(line, sizeof line,
