@@ -304,10 +304,9 @@ Outcome CpuNarrowPhase::trace_one(const Shape& target, const MeshTracer* tracer,
       const rtcd_walk_result w =
           rtcd_walk(&ray, reinterpret_cast<const rtcd_vec3*>(mesh->positions().data()),
                     reinterpret_cast<const rtcd_uint*>(mesh->triangles().data()),
-                    reinterpret_cast<const rtcd_int*>(mesh->neighbors().data()), start, config_.max_walk_steps);
+                    reinterpret_cast<const rtcd_int*>(mesh->neighbors().data()), mesh->zero_area().data(), start,
+                    config_.max_walk_steps);
       status = w.status;
-      // Kept zero-area triangles are never hit.
-      if (mesh->zero_area()[w.triangle] && status <= RTCD_LINE_FRONT) status = RTCD_LINE_PARALLEL;
       t = w.t;
       o.triangle = w.triangle;
       ++stats.rays_iterative;

@@ -78,10 +78,4 @@ Shape::Shape(Box box, double density) : geometry_(box) {
   radius_ = h.norm();
 }
 
-const char* Shape::kind() const {
-  if (std::holds_alternative<Mesh>(geometry_)) return "mesh";
-  if (std::holds_alternative<Sphere>(geometry_)) return "sphere";
-  return "box";
-}
-
 }  // namespace rtcd

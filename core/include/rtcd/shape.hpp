@@ -45,8 +45,6 @@ class Shape {
   const RaySources& sources() const { return sources_; }
   const Aabb& bounds() const { return bounds_; }
   double radius() const { return radius_; }
-  // "mesh", "sphere" or "box".
-  const char* kind() const;
 
  private:
   Geometry geometry_;

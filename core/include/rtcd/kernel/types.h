@@ -15,6 +15,7 @@
 #define RTCD_FABS(x) fabs(x)
 typedef uint rtcd_uint;
 typedef int rtcd_int;
+typedef uchar rtcd_uchar;
 #else
 #include <math.h>
 #include <stdint.h>
@@ -24,6 +25,7 @@ typedef int rtcd_int;
 #define RTCD_FABS(x) fabsf(x)
 typedef uint32_t rtcd_uint;
 typedef int32_t rtcd_int;
+typedef uint8_t rtcd_uchar;
 #endif
 
 /* Three packed floats: 12 bytes, the layout of the host's position arrays. */
@@ -41,9 +43,6 @@ RTCD_INLINE rtcd_vec3 rtcd_v3(float x, float y, float z) {
 RTCD_INLINE rtcd_vec3 rtcd_sub(rtcd_vec3 a, rtcd_vec3 b) { return rtcd_v3(a.x - b.x, a.y - b.y, a.z - b.z); }
 RTCD_INLINE rtcd_vec3 rtcd_neg(rtcd_vec3 a) { return rtcd_v3(-a.x, -a.y, -a.z); }
 RTCD_INLINE float rtcd_dot(rtcd_vec3 a, rtcd_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
-RTCD_INLINE rtcd_vec3 rtcd_cross(rtcd_vec3 a, rtcd_vec3 b) {
-  return rtcd_v3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
-}
 RTCD_INLINE float rtcd_component(rtcd_vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
 
 /* How a ray's line ended up against the target surface. Shared by the walk,

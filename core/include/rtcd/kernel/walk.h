@@ -22,10 +22,12 @@ RTCD_INLINE int rtcd_crossing_status(int facing, float t_num) {
 
 /* positions: 3 floats per vertex; triangles: 3 vertex indices per triangle;
  * neighbors: 3 triangle indices per triangle in the edge numbering of
- * locate.h, -1 across a boundary edge. */
+ * locate.h, -1 across a boundary edge; zero_area: 1 for a kept zero-area
+ * triangle, which is never hit (the walk ends there as PARALLEL). */
 RTCD_INLINE rtcd_walk_result rtcd_walk(const rtcd_ray* ray, RTCD_GLOBAL const rtcd_vec3* positions,
                                        RTCD_GLOBAL const rtcd_uint* triangles,
-                                       RTCD_GLOBAL const rtcd_int* neighbors, rtcd_int start,
+                                       RTCD_GLOBAL const rtcd_int* neighbors,
+                                       RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int start,
                                        rtcd_uint max_steps) {
   rtcd_walk_result r;
   rtcd_int previous = -1;
@@ -39,7 +41,7 @@ RTCD_INLINE rtcd_walk_result rtcd_walk(const rtcd_ray* ray, RTCD_GLOBAL const rt
                                     positions[triangles[3 * tri + 2]]);
     r.steps += 1;
     r.triangle = tri;
-    if (loc.det == 0.0f) {
+    if (loc.det == 0.0f || zero_area[tri]) {
       r.status = RTCD_LINE_PARALLEL;
       return r;
     }
