@@ -178,7 +178,7 @@ Mesh concave_blob(int triangles, uint32_t seed, double radius) {
     const double aspect = std::abs(std::log(double(segments) / (2.0 * rings)));
     const int product = rings * segments, best_product = best_rings * best_segments;
     const double best_aspect = std::abs(std::log(double(best_segments) / (2.0 * best_rings)));
-    if (product + 20 * aspect > best_product + 20 * best_aspect) {
+    if (product - 20 * aspect > best_product - 20 * best_aspect) {
       best_rings = rings;
       best_segments = segments;
     }
