@@ -6,9 +6,11 @@
 #include <fstream>
 #include <sstream>
 
+#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "rtcd/error.hpp"
+#include "rtcd/validation/families.hpp"
 
 namespace rtcd::cli {
 namespace {
@@ -45,7 +47,31 @@ Pose pose_from(const std::vector<double>& v, const std::string& what) {
 
 }  // namespace
 
+Config Knobs::config() const {
+  Config c;
+  c.predictive = !no_predictive;
+  c.max_walk_steps = max_walk_steps;
+  c.displacement_threshold = displacement_threshold;
+  c.distance_extension = distance_extension;
+  return c;
+}
+
+void add_knobs(CLI::App& command, Knobs& k) {
+  command.add_flag("--no-predictive", k.no_predictive, "Do not cast predictive rays");
+  command.add_option("--max-walk-steps", k.max_walk_steps, "Walk step limit [1, 1000000]");
+  command.add_option("--displacement-threshold", k.displacement_threshold, "Equation 2.1 threshold");
+  command.add_option("--distance-extension", k.distance_extension, "Predictive range and bounding-box growth");
+}
+
 std::shared_ptr<const Shape> parse_shape(const std::string& spec, double sampling, bool allow_zero_area) {
+  if (spec.rfind("family:", 0) == 0) {
+    const auto colon = spec.rfind(':');
+    const std::string body = spec.substr(colon + 1);
+    if (colon < 7 || (body != "a" && body != "b"))
+      throw UsageError("'" + spec + "': expected family:NAME:a or family:NAME:b");
+    const validation::Family f = validation::make_family(spec.substr(7, colon - 7));
+    return body == "a" ? f.a : f.b;
+  }
   if (spec.rfind("sphere:", 0) == 0) {
     const auto v = parse_numbers(spec.substr(7), "sphere radius in '" + spec + "'");
     if (v.size() != 1) throw UsageError("'" + spec + "': expected sphere:R");

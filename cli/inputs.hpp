@@ -5,12 +5,28 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/config.hpp"
 #include "rtcd/geometry.hpp"
 #include "rtcd/shape.hpp"
 
+namespace CLI {
+class App;
+}
+
 namespace rtcd::cli {
 
-// "sphere:R", "box:HX,HY,HZ" or a mesh file (.obj .off .ply .stl).
+// The accuracy knobs every subcommand that runs the narrow phase takes.
+struct Knobs {
+  bool no_predictive = false;
+  uint32_t max_walk_steps = Config{}.max_walk_steps;
+  double displacement_threshold = Config{}.displacement_threshold;
+  double distance_extension = Config{}.distance_extension;
+  Config config() const;  // the default Config with these knobs set
+};
+void add_knobs(CLI::App& command, Knobs& knobs);
+
+// "sphere:R", "box:HX,HY,HZ", a mesh file (.obj .off .ply .stl), or a body of a
+// validation family, "family:NAME:a" or "family:NAME:b" (to replay its cases).
 std::shared_ptr<const Shape> parse_shape(const std::string& spec, double sampling, bool allow_zero_area);
 
 // "tx ty tz qw qx qy qz" (spaces or commas).

@@ -1,11 +1,13 @@
 // The `rtcd` command: list backends, query a pair of shapes (one pose or a
-// sequence of poses carrying the pair state across steps).
+// sequence of poses carrying the pair state across steps), validate a
+// backend against the oracles.
 #include <iostream>
 
 #include <CLI/CLI.hpp>
 
 #include "inputs.hpp"
 #include "report.hpp"
+#include "validate.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
 
@@ -15,10 +17,8 @@ constexpr int kBadInput = 2;
 
 struct QueryOptions {
   std::string a, b, pose_a, pose_b, backend = "auto", mode = "auto", sequence;
-  bool no_predictive = false, json = false, allow_zero_area = false;
-  uint32_t max_walk_steps = rtcd::Config{}.max_walk_steps;
-  double displacement_threshold = rtcd::Config{}.displacement_threshold;
-  double distance_extension = rtcd::Config{}.distance_extension;
+  bool json = false, allow_zero_area = false;
+  rtcd::cli::Knobs knobs;
   double sampling = 0.0;
 };
 
@@ -35,12 +35,8 @@ int run_backends(bool json) {
 }
 
 int run_query(const QueryOptions& o) {
-  rtcd::Config config;
+  rtcd::Config config = o.knobs.config();
   config.mode = rtcd::parse_mode(o.mode);
-  config.predictive = !o.no_predictive;
-  config.max_walk_steps = o.max_walk_steps;
-  config.displacement_threshold = o.displacement_threshold;
-  config.distance_extension = o.distance_extension;
   config.validate();
 
   std::vector<rtcd::cli::SequenceStep> steps;
@@ -99,17 +95,34 @@ int main(int argc, char** argv) {
   query->add_option("--sequence", q.sequence, "JSON array of {\"pose_a\": [7], \"pose_b\": [7]} steps");
   query->add_option("--backend", q.backend, "basic, embree or auto");
   query->add_option("--mode", q.mode, "full, iterative or auto");
-  query->add_flag("--no-predictive", q.no_predictive, "Do not cast predictive rays");
-  query->add_option("--max-walk-steps", q.max_walk_steps, "Walk step limit [1, 1000000]");
-  query->add_option("--displacement-threshold", q.displacement_threshold, "Equation 2.1 threshold");
-  query->add_option("--distance-extension", q.distance_extension, "Predictive range and bounding-box growth");
+  rtcd::cli::add_knobs(*query, q.knobs);
   query->add_option("--sampling", q.sampling, "Extra ray origins per unit area on sphere and box sources");
   query->add_flag("--allow-zero-area", q.allow_zero_area, "Keep zero-area triangles (never hit)");
   query->add_flag("--json", q.json, "Print JSON");
 
+  rtcd::cli::ValidateOptions v;
+  bool sweep = false;
+  auto* validate = app.add_subcommand(
+      "validate", "Judge a backend on random pairs against the exact reference, FCL, GIMPACT and libccd");
+  validate->add_option("--backend", v.backend, "basic, embree or auto (default: every usable backend)");
+  validate->add_option("--family", v.family, "convex, concave, torus, plates, highres or primitives (default: all)");
+  validate->add_option("--pairs", v.pairs, "Random pairs per family")->check(CLI::Range(size_t(1), size_t(10'000'000)));
+  validate->add_option("--seed", v.seed, "Seed of the random poses");
+  validate->add_option("--mode", v.mode, "full, or iterative (a full step, a motion within the threshold, a walk)");
+  rtcd::cli::add_knobs(*validate, v.knobs);
+  validate->add_flag("--no-oracles", v.no_oracles, "Only the exact reference (skip FCL, GIMPACT, libccd)");
+  validate->add_flag("--json", v.json, "Print JSON");
+  validate->add_flag("--sweep", sweep, "Sweep the accuracy knobs; write CSV (see --csv)");
+  validate->add_option("--csv", v.sweep_csv, "Where --sweep writes its CSV (default: standard output)");
+
   try {
     app.parse(argc, argv);
     if (*backends) return run_backends(backends_json);
+    if (*validate) {
+      if (sweep && v.sweep_csv.empty()) v.sweep_csv = "-";
+      if (!sweep && !v.sweep_csv.empty()) throw rtcd::UsageError("--csv needs --sweep");
+      return rtcd::cli::run_validate(v);
+    }
     return run_query(q);
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);

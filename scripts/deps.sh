@@ -1,11 +1,13 @@
 #!/usr/bin/env bash
-# Installs the Debian 12 packages rtcd needs, only when some are missing.
+# Installs the Debian 12 packages rtcd, its oracles and its plots need, only
+# when some are missing.
 set -euo pipefail
 packages=(
   cmake ninja-build g++ clang pkg-config
   libeigen3-dev libtbb-dev libembree-dev libassimp-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
+  libfcl-dev libccd-dev libbullet-dev python3-matplotlib
 )
 missing=()
 for p in "${packages[@]}"; do

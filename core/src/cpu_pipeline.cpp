@@ -47,16 +47,27 @@ struct Outcome {
   Eigen::Vector3d origin, direction;
 };
 
-// Distance along the ray to the plane of the triangle the tracer or walk
-// chose, in double precision: depths then agree across backends (and with
-// the exact reference) to far better than float.
-double refined_distance(const Mesh& mesh, int32_t triangle, const Eigen::Vector3d& origin,
+// Distance along the ray to where it leaves the target through the face the
+// kernel chose, in double precision: depths then agree across backends (and
+// with the exact reference) to far better than float. Mesh: the triangle's
+// plane; box: the face's plane; sphere: the far root (where the line leaves).
+double refined_distance(const Shape& target, int32_t face, const Eigen::Vector3d& origin,
                         const Eigen::Vector3d& direction) {
-  const auto& tri = mesh.triangles()[triangle];
-  const Eigen::Vector3d a = mesh.positions()[tri[0]].cast<double>();
-  const Eigen::Vector3d n =
-      (mesh.positions()[tri[1]].cast<double>() - a).cross(mesh.positions()[tri[2]].cast<double>() - a);
-  return n.dot(a - origin) / n.dot(direction);
+  if (const Mesh* mesh = target.mesh()) {
+    const auto& tri = mesh->triangles()[face];
+    const Eigen::Vector3d a = mesh->positions()[tri[0]].cast<double>();
+    const Eigen::Vector3d n =
+        (mesh->positions()[tri[1]].cast<double>() - a).cross(mesh->positions()[tri[2]].cast<double>() - a);
+    return n.dot(a - origin) / n.dot(direction);
+  }
+  if (const auto* sphere = std::get_if<Sphere>(&target.geometry())) {
+    const double a = direction.squaredNorm(), b = origin.dot(direction);
+    const double c = origin.squaredNorm() - sphere->radius * sphere->radius;
+    return (-b + std::sqrt(std::max(b * b - a * c, 0.0))) / a;
+  }
+  const int axis = face / 2;
+  const double plane = (face % 2 == 0 ? 1.0 : -1.0) * std::get<Box>(target.geometry()).half_extents[axis];
+  return (plane - origin[axis]) / direction[axis];
 }
 
 struct JobStats {
@@ -272,11 +283,9 @@ void CpuNarrowPhase::run(Job& job) const {
       if (o.kind == RTCD_RAY_DROPPED) continue;
       o.origin = p;
       o.direction = d;
-      if (const Mesh* mesh = target.shape->mesh()) {
-        // Keep the kernel's decision; only sharpen the distance.
-        const double t = refined_distance(*mesh, o.triangle, p, d);
-        o.t = o.kind == RTCD_RAY_PENETRATING ? std::max(t, 0.0) : std::min(t, 0.0);
-      }
+      // Keep the kernel's decision; only sharpen the distance.
+      const double t = refined_distance(*target.shape, o.triangle, p, d);
+      o.t = o.kind == RTCD_RAY_PENETRATING ? std::max(t, 0.0) : std::min(t, 0.0);
       per_chunk[c].push_back(o);
     }
   });

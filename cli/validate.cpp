@@ -1,0 +1,89 @@
+// `rtcd validate` (see validate.hpp).
+#include "validate.hpp"
+
+#include <cstdio>
+#include <fstream>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "rtcd/error.hpp"
+#include "rtcd/narrow_phase.hpp"
+#include "rtcd/validation/sweep.hpp"
+
+namespace rtcd::cli {
+namespace {
+
+void print_row(const validation::Summary& s) {
+  auto ratio = [&](double oracle) { return s.time_ours > 0 && oracle > 0 ? oracle / s.time_ours : 0.0; };
+  std::printf("%-10s %-6s %-9s %5zu %5.1f%% %7zu %8.2e %8.2e %5zu %8.1e %6.2f%% %4zu/%-4zu %5.2f%% %6.2f%% %9.1f %8.1f %8.1f %8.1f  %5.2f %5.2f\n",
+              s.family.c_str(), s.backend.c_str(), to_string(s.mode), s.pairs, 100 * s.colliding_fraction(), s.deep,
+              s.missed_rate(), s.missed_p99, s.false_rays, s.max_relative_depth_error, 100 * s.fcl_agreement(),
+              s.fcl_blind_contained, s.contained, 100 * s.edge_edge_rate(), 100 * s.gimpact_agreement(),
+              1e6 * s.time_ours, 1e6 * s.time_exact, 1e6 * s.time_fcl, 1e6 * s.time_gimpact, ratio(s.time_fcl),
+              ratio(s.time_gimpact));
+  if (s.mode == validation::RunMode::iterative)
+    std::printf("%-10s missed: %zu of %zu deep origins, %zu never tracked after the full step; per colliding pair "
+                "p50 %.2e p90 %.2e p99 %.2e max %.2e\n",
+                "", s.missed, s.deep, s.missed_untracked, s.missed_p50, s.missed_p90, s.missed_p99, s.missed_max);
+  if (s.ccd_pairs)
+    std::printf("%-10s libccd on %zu convex pairs: our largest projected depth / libccd depth = %.3f on average, "
+                "mean |difference| %.4f; libccd %.1f us per pair\n",
+                "", s.ccd_pairs, s.ccd_mean_ratio, s.ccd_mean_abs_difference, 1e6 * s.time_ccd);
+}
+
+}  // namespace
+
+int run_validate(const ValidateOptions& o) {
+  std::vector<std::string> families = o.family.empty() ? validation::family_names() : std::vector{o.family};
+  std::vector<std::string> backends;
+  if (o.backend.empty()) {
+    for (const auto& b : available_backends())
+      if (b.usable) backends.push_back(b.name);
+  } else {
+    backends.push_back(o.backend);
+  }
+
+  if (!o.sweep_csv.empty()) {
+    if (families.size() != 1 || backends.size() != 1)
+      throw UsageError("--sweep needs one --family and one --backend");
+    const auto points = validation::sweep(validation::make_family(families[0]), backends[0], o.pairs, o.seed);
+    if (o.sweep_csv == "-") {
+      validation::write_csv(std::cout, points);
+    } else {
+      std::ofstream out(o.sweep_csv);
+      if (!out) throw UsageError("cannot write '" + o.sweep_csv + "'");
+      validation::write_csv(out, points);
+      std::cerr << "wrote " << points.size() << " sweep points to " << o.sweep_csv << '\n';
+    }
+    return 0;
+  }
+
+  validation::RunOptions run;
+  run.config = o.knobs.config();
+  run.mode = validation::parse_run_mode(o.mode);
+  run.pairs = o.pairs;
+  run.seed = o.seed;
+  run.with_oracles = !o.no_oracles;
+  nlohmann::json all = nlohmann::json::array();
+  if (!o.json)
+    std::printf("%-10s %-6s %-9s %5s %6s %7s %8s %8s %5s %8s %7s %9s %6s %7s %9s %8s %8s %8s  %5s %5s\n", "family",
+                "backend", "mode", "pairs", "coll", "deep", "missed", "miss p99", "false", "depth re", "FCL agr",
+                "FCL blind", "e-e", "GIM agr", "ours us", "exact us", "FCL us", "GIM us", "xFCL", "xGIM");
+  for (const auto& family_name : families) {
+    const validation::Family family = validation::make_family(family_name);
+    for (const auto& backend : backends) {
+      run.backend = backend;
+      const validation::Summary s = validation::run_family(family, run).summary;
+      if (o.json)
+        all.push_back(validation::to_json(s));
+      else
+        print_row(s);
+      std::fflush(stdout);
+    }
+  }
+  if (o.json) std::cout << all.dump(2) << '\n';
+  return 0;
+}
+
+}  // namespace rtcd::cli

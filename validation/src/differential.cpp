@@ -1,0 +1,269 @@
+// Differential validation (see differential.hpp).
+#include "rtcd/validation/differential.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <iomanip>
+#include <optional>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "rtcd/error.hpp"
+#include "rtcd/narrow_phase.hpp"
+#include "rtcd/oracle/exact.hpp"
+#include "rtcd/oracle/third_party.hpp"
+
+namespace rtcd::validation {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// What our backend said of one ray origin.
+struct OurRay {
+  double depth = -1.0;   // of its penetrating ray; -1 when it has none
+  bool tracked = false;  // iterative runs: a ray was tracked for it after the full step
+};
+
+// Judges one direction's rays against the exact reference.
+void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>& ours, bool target_closed,
+           double epsilon, PairMetrics& m, double& depth_error_sum) {
+  size_t inside = 0;
+  for (size_t v = 0; v < exact.size(); ++v) {
+    const oracle::ExactRay& e = exact[v];
+    const bool penetrating = ours[v].depth >= 0.0;
+    if (penetrating && e.inside && e.depth >= 0.0) {
+      const double error = std::abs(ours[v].depth - e.depth);
+      m.max_depth_error = std::max(m.max_depth_error, error);
+      m.max_relative_depth_error = std::max(m.max_relative_depth_error, error / std::max(e.depth, epsilon));
+      depth_error_sum += error;
+      ++m.depth_checked;
+    }
+    if (!target_closed) continue;  // no inside/outside claims on an open target
+    inside += e.inside;
+    if (e.deep()) {
+      ++m.deep;
+      m.missed += !penetrating;
+      m.missed_untracked += !penetrating && !ours[v].tracked;
+    } else if (e.far_outside()) {
+      ++m.far_outside;
+      m.false_rays += penetrating;
+    }
+  }
+  m.inside_any += inside;
+  if (target_closed && inside == exact.size()) m.contained = true;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, size_t(q * double(v.size())))];
+}
+
+std::string pose_text(const Pose& p) {
+  std::ostringstream s;
+  s << std::setprecision(17) << p.position.x() << ' ' << p.position.y() << ' ' << p.position.z() << ' '
+    << p.orientation.w() << ' ' << p.orientation.x() << ' ' << p.orientation.y() << ' ' << p.orientation.z();
+  return s.str();
+}
+
+}  // namespace
+
+const char* to_string(RunMode mode) { return mode == RunMode::full ? "full" : "iterative"; }
+
+RunMode parse_run_mode(const std::string& text) {
+  if (text == "full") return RunMode::full;
+  if (text == "iterative") return RunMode::iterative;
+  throw UsageError("unknown validation mode '" + text + "' (expected full or iterative)");
+}
+
+RunResult run_family(const Family& family, const RunOptions& options) {
+  if (options.pairs == 0) throw UsageError("a validation run needs at least one pair");
+  Config config = options.config;
+  config.mode = options.mode == RunMode::full ? Mode::full : Mode::automatic;
+  config.validate();
+  const double epsilon = options.epsilon_scale * std::max(family.a->radius(), family.b->radius());
+  std::optional<tbb::global_control> one_thread;
+  if (options.single_thread) one_thread.emplace(tbb::global_control::max_allowed_parallelism, 1);
+
+  RunResult result;
+  Summary& s = result.summary;
+  s.family = family.name;
+  s.mode = options.mode;
+  s.pairs = options.pairs;
+  s.seed = options.seed;
+  s.epsilon = epsilon;
+
+  // Our backend: every pair in one batch, as a host would step them.
+  auto narrow = make_narrow_phase(options.backend, config);
+  s.backend = narrow->name();
+  const ShapeId sa = narrow->add_shape(family.a), sb = narrow->add_shape(family.b);
+  std::vector<PosePair> judged(options.pairs);
+  std::vector<BodyPair> pairs(options.pairs);
+  for (size_t i = 0; i < options.pairs; ++i) {
+    judged[i] = random_poses(family, options.seed, i);
+    pairs[i] = {narrow->add_body(sa, judged[i].a), narrow->add_body(sb, judged[i].b)};
+  }
+  StepResult step;
+  std::vector<std::vector<std::pair<Side, uint32_t>>> tracked(options.pairs);  // after the full step
+  if (options.mode == RunMode::iterative) {
+    narrow->detect(pairs, step);
+    for (size_t i = 0; i < options.pairs; ++i) {
+      for (const Contact& c : step.contacts_of(step.pairs[i])) tracked[i].push_back({c.source, c.vertex});
+      for (const PredictiveRay& p : step.predictive_of(step.pairs[i])) tracked[i].push_back({p.source, p.vertex});
+    }
+    for (size_t i = 0; i < options.pairs; ++i) {
+      judged[i] = moved(family, judged[i], config.displacement_threshold, options.seed, i);
+      narrow->set_pose(pairs[i].a, judged[i].a);
+      narrow->set_pose(pairs[i].b, judged[i].b);
+    }
+  }
+  const auto t0 = Clock::now();
+  narrow->detect(pairs, step);
+  s.time_ours = seconds_since(t0) / double(options.pairs);
+
+  const oracle::ExactShape exact_a(family.a), exact_b(family.b);
+  std::optional<oracle::FclShape> fcl_a, fcl_b;
+  std::optional<oracle::GimpactShape> gimpact_a, gimpact_b;
+  if (options.with_oracles) {
+    fcl_a.emplace(*family.a);
+    fcl_b.emplace(*family.b);
+    gimpact_a.emplace(*family.a);
+    gimpact_b.emplace(*family.b);
+  }
+
+  double depth_error_sum = 0.0, ccd_difference_sum = 0.0, ccd_ratio_sum = 0.0;
+  std::vector<OurRay> ours_a(family.a->sources().origins.size()), ours_b(family.b->sources().origins.size());
+  std::vector<double> missed_rates;
+  for (size_t i = 0; i < options.pairs; ++i) {
+    PairMetrics m;
+    m.index = i;
+    m.poses = judged[i];
+    const PairResult& pr = step.pairs[i];
+    m.iterative = pr.mode == PairMode::iterative;
+    m.colliding_ours = pr.colliding;
+    std::fill(ours_a.begin(), ours_a.end(), OurRay{});
+    std::fill(ours_b.begin(), ours_b.end(), OurRay{});
+    for (const auto& [side, vertex] : tracked[i]) (side == Side::a ? ours_a : ours_b)[vertex].tracked = true;
+    for (const Contact& c : step.contacts_of(pr)) {
+      (c.source == Side::a ? ours_a : ours_b)[c.vertex].depth = c.depth;
+      m.our_projected_depth = std::max(m.our_projected_depth, c.projected_depth);
+    }
+
+    auto t = Clock::now();
+    const auto rays_ab = exact_b.rays_from(*family.a, m.poses.a, m.poses.b, epsilon);
+    const auto rays_ba = exact_a.rays_from(*family.b, m.poses.b, m.poses.a, epsilon);
+    s.time_exact += seconds_since(t);
+    judge(rays_ab, ours_a, exact_b.closed(), epsilon, m, depth_error_sum);
+    judge(rays_ba, ours_b, exact_a.closed(), epsilon, m, depth_error_sum);
+    m.colliding_exact = m.deep > 0;
+
+    if (options.with_oracles) {
+      t = Clock::now();
+      m.fcl = fcl_a->collide(m.poses.a, *fcl_b, m.poses.b).colliding;
+      s.time_fcl += seconds_since(t);
+      if (i < options.gimpact_pairs) {
+        t = Clock::now();
+        m.gimpact = gimpact_a->collide(m.poses.a, *gimpact_b, m.poses.b).colliding;
+        s.time_gimpact += seconds_since(t);
+        m.has_gimpact = true;
+        ++s.gimpact_runs;
+      }
+      if (family.convex) {
+        t = Clock::now();
+        const auto p = oracle::ccd_penetration(*family.a, m.poses.a, *family.b, m.poses.b);
+        s.time_ccd += seconds_since(t);
+        m.has_ccd = true;
+        m.ccd = p.colliding;
+        m.ccd_depth = p.depth;
+      }
+    }
+
+    // Aggregate.
+    s.iterative_pairs += m.iterative;
+    s.deep += m.deep;
+    s.missed += m.missed;
+    s.missed_untracked += m.missed_untracked;
+    s.far_outside += m.far_outside;
+    s.false_rays += m.false_rays;
+    s.depth_checked += m.depth_checked;
+    s.max_depth_error = std::max(s.max_depth_error, m.max_depth_error);
+    s.max_relative_depth_error = std::max(s.max_relative_depth_error, m.max_relative_depth_error);
+    if (m.deep) missed_rates.push_back(m.missed_rate());
+    s.colliding += m.colliding_exact;
+    s.contained += m.contained && m.colliding_exact;
+    if (options.with_oracles) {
+      if (m.colliding_exact && !m.contained) {
+        ++s.fcl_checked;
+        s.fcl_agree += m.fcl;
+        s.gimpact_checked += m.has_gimpact;
+        s.gimpact_agree += m.has_gimpact && m.gimpact;
+      }
+      s.fcl_blind_contained += m.contained && m.colliding_exact && !m.fcl;
+      s.edge_edge += m.fcl && m.inside_any == 0;
+      if (m.has_ccd && m.ccd && m.colliding_ours) {
+        ++s.ccd_pairs;
+        ccd_difference_sum += std::abs(m.our_projected_depth - m.ccd_depth);
+        ccd_ratio_sum += m.our_projected_depth / m.ccd_depth;
+      }
+    }
+    result.pairs.push_back(m);
+  }
+  const double n = double(options.pairs);
+  s.time_exact /= n;
+  s.time_fcl /= n;
+  s.time_gimpact /= double(std::max<size_t>(s.gimpact_runs, 1));
+  s.time_ccd /= n;
+  s.mean_depth_error = s.depth_checked ? depth_error_sum / double(s.depth_checked) : 0.0;
+  s.missed_p50 = percentile(missed_rates, 0.5);
+  s.missed_p90 = percentile(missed_rates, 0.9);
+  s.missed_p99 = percentile(missed_rates, 0.99);
+  s.missed_max = percentile(missed_rates, 1.0);
+  if (s.ccd_pairs) {
+    s.ccd_mean_abs_difference = ccd_difference_sum / double(s.ccd_pairs);
+    s.ccd_mean_ratio = ccd_ratio_sum / double(s.ccd_pairs);
+  }
+  return result;
+}
+
+nlohmann::json to_json(const Summary& s) {
+  return {{"family", s.family},
+          {"backend", s.backend},
+          {"mode", to_string(s.mode)},
+          {"pairs", s.pairs},
+          {"seed", s.seed},
+          {"epsilon", s.epsilon},
+          {"iterative_pairs", s.iterative_pairs},
+          {"colliding_fraction", s.colliding_fraction()},
+          {"deep_origins", s.deep},
+          {"missed", s.missed},
+          {"missed_rate", s.missed_rate()},
+          {"missed_untracked", s.missed_untracked},
+          {"missed_rate_per_pair", {{"p50", s.missed_p50}, {"p90", s.missed_p90}, {"p99", s.missed_p99}, {"max", s.missed_max}}},
+          {"far_outside_origins", s.far_outside},
+          {"false_rays", s.false_rays},
+          {"depth_checked", s.depth_checked},
+          {"depth_error", {{"max", s.max_depth_error}, {"mean", s.mean_depth_error}, {"max_relative", s.max_relative_depth_error}}},
+          {"fcl", {{"checked", s.fcl_checked}, {"agreement", s.fcl_agreement()}, {"contained", s.contained},
+                   {"blind_contained", s.fcl_blind_contained}, {"edge_edge", s.edge_edge}, {"edge_edge_rate", s.edge_edge_rate()}}},
+          {"gimpact", {{"pairs_run", s.gimpact_runs}, {"checked", s.gimpact_checked}, {"agreement", s.gimpact_agreement()}}},
+          {"ccd", {{"pairs", s.ccd_pairs}, {"mean_abs_difference", s.ccd_mean_abs_difference}, {"mean_ratio", s.ccd_mean_ratio}}},
+          {"seconds_per_pair", {{"ours", s.time_ours}, {"exact", s.time_exact}, {"fcl", s.time_fcl},
+                                {"gimpact", s.time_gimpact}, {"ccd", s.time_ccd}}}};
+}
+
+std::string describe(const Family& family, const PairMetrics& m, const RunOptions& o) {
+  std::ostringstream s;
+  s << "family " << family.name << ", seed " << o.seed << ", pair " << m.index << " (" << to_string(o.mode)
+    << "): deep " << m.deep << ", missed " << m.missed << ", false rays " << m.false_rays << ", max depth error "
+    << m.max_depth_error << "\n  pose A: \"" << pose_text(m.poses.a) << "\"\n  pose B: \"" << pose_text(m.poses.b)
+    << "\"\n  replay: rtcd query family:" << family.name << ":a family:" << family.name << ":b --backend "
+    << o.backend << " --mode full --pose-a \"" << pose_text(m.poses.a) << "\" --pose-b \"" << pose_text(m.poses.b)
+    << "\"\n  or:     rtcd validate --family " << family.name << " --backend " << o.backend << " --mode "
+    << to_string(o.mode) << " --seed " << o.seed << " --pairs " << m.index + 1;
+  return s.str();
+}
+
+}  // namespace rtcd::validation

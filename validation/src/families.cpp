@@ -1,0 +1,122 @@
+// Family shapes and random poses (see families.hpp).
+#include "rtcd/validation/families.hpp"
+
+#include <cmath>
+#include <numbers>
+
+#include "rtcd/criterion.hpp"
+#include "rtcd/error.hpp"
+#include "rtcd/mesh_gen.hpp"
+
+namespace rtcd::validation {
+namespace {
+
+// Uniform in [0, 1) from mt19937_64's raw output, which the standard fixes
+// (distributions are implementation-defined), so poses replay anywhere.
+double unit(std::mt19937_64& g) { return double(g() >> 11) * 0x1.0p-53; }
+
+Eigen::Vector3d unit_vector(std::mt19937_64& g) {
+  const double z = 2 * unit(g) - 1, phi = 2 * std::numbers::pi * unit(g), r = std::sqrt(1 - z * z);
+  return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+// Uniform over rotations (Shoemake).
+Eigen::Quaterniond random_rotation(std::mt19937_64& g) {
+  const double u1 = unit(g), u2 = 2 * std::numbers::pi * unit(g), u3 = 2 * std::numbers::pi * unit(g);
+  const double s1 = std::sqrt(1 - u1), s2 = std::sqrt(u1);
+  return Eigen::Quaterniond(s2 * std::cos(u3), s1 * std::sin(u2), s1 * std::cos(u2), s2 * std::sin(u3));
+}
+
+std::mt19937_64 generator(uint64_t seed, uint64_t index, uint64_t stream) {
+  std::seed_seq seq{uint32_t(seed), uint32_t(seed >> 32), uint32_t(index), uint32_t(index >> 32), uint32_t(stream)};
+  return std::mt19937_64(seq);
+}
+
+std::shared_ptr<const Shape> mesh(Mesh m) { return std::make_shared<Shape>(std::move(m)); }
+
+}  // namespace
+
+const std::vector<std::string>& family_names() {
+  static const std::vector<std::string> names = {"convex", "concave", "torus", "plates", "highres", "primitives"};
+  return names;
+}
+
+Family make_family(const std::string& name) {
+  Family f;
+  f.name = name;
+  if (name == "convex") {
+    f.description = "box mesh (half 0.4) vs icosphere mesh (r 1, 1280 triangles)";
+    f.a = mesh(gen::box({0.4, 0.4, 0.4}));
+    f.b = mesh(gen::icosphere(1.0, 3));
+    f.convex = true;
+    f.reach = 2.2;
+  } else if (name == "concave") {
+    f.description = "two 902-triangle concave blobs (r 0.6 and 1)";
+    f.a = mesh(gen::concave_blob(902, 11, 0.6));
+    f.b = mesh(gen::concave_blob(902, 12, 1.0));
+    f.reach = 2.2;
+  } else if (name == "torus") {
+    f.description = "torus (R 0.5, r 0.18) vs torus (R 1, r 0.35)";
+    f.a = mesh(gen::torus(0.5, 0.18, 32, 16));
+    f.b = mesh(gen::torus(1.0, 0.35, 48, 24));
+    f.reach = 1.9;
+    f.thinnest = 0.36;
+  } else if (name == "plates") {
+    f.description = "902-triangle concave blob (r 0.6) vs thin plate (2 x 2 x 0.04)";
+    f.a = mesh(gen::concave_blob(902, 13, 0.6));
+    f.b = mesh(gen::box({1.0, 1.0, 0.02}));
+    f.reach = 1.8;
+    f.thinnest = 0.04;
+  } else if (name == "highres") {
+    f.description = "902-triangle concave blob (r 0.6) vs 20000-triangle concave blob (r 1)";
+    f.a = mesh(gen::concave_blob(902, 14, 0.6));
+    f.b = mesh(gen::concave_blob(20000, 15, 1.0));
+    f.reach = 2.2;
+  } else if (name == "primitives") {
+    f.description = "box volume (0.3 x 0.4 x 0.5 half) vs sphere volume (r 1)";
+    f.a = std::make_shared<Shape>(Box{{0.3, 0.4, 0.5}});
+    f.b = std::make_shared<Shape>(Sphere{1.0});
+    f.convex = true;
+    f.reach = 2.2;
+  } else {
+    std::string list;
+    for (const auto& n : family_names()) list += (list.empty() ? "" : ", ") + n;
+    throw UsageError("unknown family '" + name + "' (families: " + list + ")");
+  }
+  return f;
+}
+
+double Family::iterative_threshold() const {
+  return std::min(0.01 * std::max(a->radius(), b->radius()), 0.1 * thinnest);
+}
+
+PosePair random_poses(const Family& family, uint64_t seed, uint64_t index) {
+  auto g = generator(seed, index, 0);
+  PosePair p;
+  const Eigen::Vector3d centre = 4.0 * Eigen::Vector3d(unit(g) - 0.5, unit(g) - 0.5, unit(g) - 0.5);
+  p.a.orientation = random_rotation(g);
+  p.b.orientation = random_rotation(g);
+  p.a.position = centre;
+  p.b.position = centre + family.reach * unit(g) * unit_vector(g);
+  return p;
+}
+
+PosePair moved(const Family& family, const PosePair& poses, double displacement, uint64_t seed, uint64_t index) {
+  auto g = generator(seed, index, 1);
+  // Split the budget between a translation and a rotation about B's centre,
+  // then shrink until equation 2.1 (on the larger radius) is within it.
+  const double radius = std::max(family.a->radius(), family.b->radius());
+  PosePair p = poses;
+  const Eigen::Vector3d shift = unit_vector(g) * unit(g);
+  const Eigen::Vector3d axis = unit_vector(g);
+  const double turn = unit(g);
+  for (double scale = displacement; scale > 0; scale *= 0.5) {
+    p.b.position = poses.b.position + 0.5 * scale * shift;
+    p.b.orientation = (Eigen::AngleAxisd(0.5 * scale * turn / radius, axis) * poses.b.orientation).normalized();
+    const Pose before = poses.b.inverse() * poses.a, after = p.b.inverse() * p.a;
+    if (max_displacement(before, after, radius) <= displacement) break;
+  }
+  return p;
+}
+
+}  // namespace rtcd::validation
