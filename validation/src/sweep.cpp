@@ -3,8 +3,18 @@
 
 #include <algorithm>
 #include <functional>
+#include <sstream>
 
 namespace rtcd::validation {
+namespace {
+
+std::string text(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+}  // namespace
 
 std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, size_t pairs, uint64_t seed) {
   struct Setting {
@@ -18,13 +28,13 @@ std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, 
   for (uint32_t steps : {1u, 2u, 4u, 8u, 16u, 64u, 256u})
     settings.push_back({"max_walk_steps", std::to_string(steps), RunMode::iterative,
                         [steps](Config& c) { c.max_walk_steps = steps; }});
-  for (double t : {0.0125, 0.025, 0.1})
-    settings.push_back({"displacement_threshold", std::to_string(t), RunMode::iterative, [t](Config& c) {
+  for (double t : {0.005, 0.01, 0.02, 0.1})
+    settings.push_back({"displacement_threshold", text(t), RunMode::iterative, [t](Config& c) {
                           c.displacement_threshold = t;
                           c.distance_extension = std::max(c.distance_extension, t);
                         }});
   for (double e : {0.05, 0.2, 0.4})
-    settings.push_back({"distance_extension", std::to_string(e), RunMode::iterative,
+    settings.push_back({"distance_extension", text(e), RunMode::iterative,
                         [e](Config& c) { c.distance_extension = e; }});
   settings.push_back({"predictive", "off", RunMode::iterative, [](Config& c) { c.predictive = false; }});
 

@@ -77,8 +77,9 @@ struct Summary {
   size_t gimpact_runs = 0, gimpact_checked = 0, gimpact_agree = 0;
   size_t ccd_pairs = 0;
   double ccd_mean_abs_difference = 0.0, ccd_mean_ratio = 0.0;  // our largest projected depth vs libccd's
-  // Seconds per pair.
-  double time_ours = 0.0, time_exact = 0.0, time_fcl = 0.0, time_gimpact = 0.0, time_ccd = 0.0;
+  // Seconds per pair (FCL: boolean collide, and collide with every contact).
+  double time_ours = 0.0, time_exact = 0.0, time_fcl = 0.0, time_fcl_contacts = 0.0, time_gimpact = 0.0,
+         time_ccd = 0.0;
 
   double missed_rate() const { return deep ? double(missed) / double(deep) : 0.0; }
   double colliding_fraction() const { return pairs ? double(colliding) / double(pairs) : 0.0; }
