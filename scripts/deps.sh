@@ -3,7 +3,7 @@
 # when some are missing.
 set -euo pipefail
 packages=(
-  cmake ninja-build g++ clang pkg-config
+  cmake ninja-build g++ clang libclang-rt-14-dev pkg-config
   libeigen3-dev libtbb-dev libembree-dev libassimp-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev

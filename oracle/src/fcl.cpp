@@ -15,6 +15,9 @@ template <class... F>
 struct overloaded : F... {
   using F::operator()...;
 };
+// Explicit guide: clang before 17 has no CTAD for aggregates.
+template <class... F>
+overloaded(F...) -> overloaded<F...>;
 
 std::shared_ptr<fcl::CollisionGeometryd> make_geometry(const Shape& shape) {
   return std::visit(

@@ -17,6 +17,9 @@ template <class... F>
 struct overloaded : F... {
   using F::operator()...;
 };
+// Explicit guide: clang before 17 has no CTAD for aggregates.
+template <class... F>
+overloaded(F...) -> overloaded<F...>;
 
 // One dispatcher per thread, made on first use: building the configuration
 // allocates its pools, far too costly per query. Sequential queries on
