@@ -93,7 +93,8 @@ double Family::iterative_threshold() const {
 PosePair random_poses(const Family& family, uint64_t seed, uint64_t index) {
   auto g = generator(seed, index, 0);
   PosePair p;
-  const Eigen::Vector3d centre = 4.0 * Eigen::Vector3d(unit(g) - 0.5, unit(g) - 0.5, unit(g) - 0.5);
+  const Eigen::Vector3d centre =
+      family.origin + 2.0 * family.reach * Eigen::Vector3d(unit(g) - 0.5, unit(g) - 0.5, unit(g) - 0.5);
   p.a.orientation = random_rotation(g);
   p.b.orientation = random_rotation(g);
   p.a.position = centre;

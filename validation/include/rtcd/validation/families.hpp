@@ -22,6 +22,7 @@ struct Family {
   bool convex = false;                // both convex: libccd applies
   double reach = 1.0;                 // centre distances are drawn from [0, reach]
   double thinnest = 1.0;              // thickness of the thinnest part of either body
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // pairs are placed around it
 
   // A displacement threshold small against both bodies: 1% of the larger
   // radius, and a tenth of the thinnest part. Motions this small between
@@ -43,7 +44,8 @@ struct PosePair {
 // The poses of pair `index` of a run with `seed`: each pair has its own
 // generator, so any one pair can be replayed alone. Uniform random
 // orientations; B's centre at a uniform distance in [0, reach] from A's
-// along a uniform direction; both placed around a random point.
+// along a uniform direction; both placed around a random point near the
+// family's origin.
 PosePair random_poses(const Family& family, uint64_t seed, uint64_t index);
 
 // The same pair after a small relative motion of B: equation 2.1 on it

@@ -1,0 +1,301 @@
+// Hard cases that must stay numerically stable, each a named test run on
+// every usable backend: rays through shared edges and vertices, targets far
+// from the origin, parallel rays, zero-area and sliver triangles, resting
+// contact, one body inside the other, thin, tiny, huge and far bodies, a
+// 100k-triangle target, open and non-manifold meshes, a concave trap,
+// rotations near 0 and 180 degrees and q against -q, determinism.
+#include <cmath>
+#include <random>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include "rtcd/error.hpp"
+#include "rtcd/mesh_gen.hpp"
+#include "rtcd/oracle/exact.hpp"
+#include "rtcd/validation/differential.hpp"
+#include "support.hpp"
+
+namespace rtcd::test {
+namespace {
+
+using Eigen::Vector3d;
+using Eigen::Vector3f;
+using validation::Family;
+using validation::RunMode;
+
+// An octahedron of half-diagonal s: its vertex normals are the axes.
+Mesh octahedron(float s) {
+  std::vector<Vector3f> p = {{s, 0, 0}, {-s, 0, 0}, {0, s, 0}, {0, -s, 0}, {0, 0, s}, {0, 0, -s}};
+  std::vector<Mesh::Triangle> t = {{0, 2, 4}, {2, 1, 4}, {1, 3, 4}, {3, 0, 4},
+                                   {2, 0, 5}, {1, 2, 5}, {3, 1, 5}, {0, 3, 5}};
+  return Mesh(p, t);
+}
+
+Mesh scaled(const Mesh& m, double s) {
+  std::vector<Vector3f> p;
+  for (const auto& v : m.positions()) p.push_back((v.cast<double>() * s).cast<float>());
+  return Mesh(p, {m.triangles().begin(), m.triangles().end()});
+}
+
+// A cube of half 1 whose +x face is a fan around `centre` (in that face's
+// plane): moving the centre onto an edge makes a zero-area triangle, near
+// it a sliver.
+Mesh cube_with_fan(const Vector3f& centre, MeshOptions options) {
+  const Mesh box = gen::box({1, 1, 1});
+  std::vector<Vector3f> p(box.positions().begin(), box.positions().end());
+  std::vector<Mesh::Triangle> t;
+  for (size_t i = 0; i < box.triangle_count(); ++i)
+    if (box.triangle_normals()[i].x() < 0.5f) t.push_back(box.triangles()[i]);
+  std::vector<uint32_t> face;  // +x corners, counter-clockwise seen from +x
+  for (uint32_t v = 0; v < p.size(); ++v)
+    if (p[v].x() > 0) face.push_back(v);
+  std::sort(face.begin(), face.end(), [&](uint32_t a, uint32_t b) {
+    return std::atan2(p[a].z(), p[a].y()) < std::atan2(p[b].z(), p[b].y());
+  });
+  const uint32_t c = uint32_t(p.size());
+  p.push_back(centre);
+  for (size_t k = 0; k < 4; ++k) t.push_back({c, face[k], face[(k + 1) % 4]});
+  return Mesh(p, t, options);
+}
+
+// Many sources in random directions (a sampled sphere volume) wholly inside
+// a closed target: every ray must come out a contact.
+size_t misses_inside(const std::string& backend, std::shared_ptr<const Shape> target, const Pose& where,
+                     double sphere_radius) {
+  auto source = std::make_shared<Shape>(Sphere{sphere_radius}, 3000.0 / (sphere_radius * sphere_radius));
+  PairRig rig(backend, source, std::move(target));
+  Pose a = where;
+  a.orientation = Eigen::Quaterniond(0.3, -0.2, 0.9, 0.1).normalized();
+  const StepResult r = rig.step(a, where);
+  size_t from_a = 0;
+  for (const Contact& c : r.contacts) {
+    from_a += c.source == Side::a;
+    EXPECT_TRUE(std::isfinite(c.depth));
+  }
+  return source->sources().origins.size() - from_a;
+}
+
+// A family of two shapes for a differential run: every deep origin found,
+// no false ray, depths exact.
+void expect_exact(const std::string& backend, const Family& f, size_t pairs, RunMode mode = RunMode::full) {
+  validation::RunOptions o;
+  o.backend = backend;
+  o.mode = mode;
+  o.pairs = pairs;
+  o.with_oracles = false;
+  o.config.distance_extension = 0.1 * f.reach;
+  o.config.displacement_threshold = f.iterative_threshold();
+  const validation::RunResult r = validation::run_family(f, o);
+  const validation::Summary& s = r.summary;
+  EXPECT_GT(s.colliding, pairs / 5) << "too few colliding pairs: vacuous";
+  EXPECT_EQ(s.missed, 0u) << "of " << s.deep;
+  EXPECT_EQ(s.false_rays, 0u);
+  EXPECT_LE(s.max_relative_depth_error, 1e-4);
+  for (const auto& m : r.pairs)
+    if (m.missed || m.false_rays || m.max_relative_depth_error > 1e-4) {
+      ADD_FAILURE() << validation::describe(f, m, o);
+      break;
+    }
+}
+
+Family family(std::string name, Mesh a, Mesh b, double reach) {
+  Family f;
+  f.name = std::move(name);
+  f.a = shape(std::move(a));
+  f.b = shape(std::move(b));
+  f.reach = reach;
+  return f;
+}
+
+class Robustness : public ::testing::TestWithParam<std::string> {};
+
+// Each inward ray of a small octahedron at the centre of a cube runs exactly
+// through the middle of a face's diagonal, the edge two triangles share.
+// Each of a small cube's runs exactly through a corner of the big one.
+TEST_P(Robustness, RaysThroughSharedEdgesAndVerticesAreFound) {
+  for (bool through_vertex : {false, true}) {
+    auto source = through_vertex ? shape(gen::box({0.1, 0.1, 0.1})) : shape(octahedron(0.1f));
+    PairRig rig(GetParam(), source, shape(gen::box({1, 1, 1})));
+    for (int step = 0; step < 3; ++step) {  // full, then walks with no motion
+      const StepResult r = rig.step(Pose{}, Pose{});
+      size_t from_a = 0;
+      for (const Contact& c : r.contacts) {
+        if (c.source != Side::a) continue;
+        ++from_a;
+        EXPECT_NEAR(c.depth, through_vertex ? 1.1 * std::sqrt(3.0) : 1.1, 1e-6);
+      }
+      EXPECT_EQ(from_a, source->sources().origins.size()) << "step " << step << (through_vertex ? " vertex" : " edge");
+      if (step > 0) {
+        EXPECT_EQ(r.pairs[0].mode, PairMode::iterative);
+        // Never oscillating: each walk ends on its first or second triangle.
+        EXPECT_LE(r.stats.walk_steps, 2 * r.stats.rays_iterative);
+      }
+    }
+  }
+}
+
+TEST_P(Robustness, WatertightFarFromTheOrigin) {
+  const Pose far = at(148376, 1234, -223423);
+  EXPECT_EQ(misses_inside(GetParam(), shape(gen::icosphere(1.0, 3)), far, 0.6), 0u);
+  EXPECT_EQ(misses_inside(GetParam(), shape(gen::concave_blob(902, 7, 1.0)), far, 0.25), 0u);
+}
+
+// Rays lying in the plane of a target face: finite results, the rays that
+// do leave the target found.
+TEST_P(Robustness, RayInThePlaneOfATriangle) {
+  PairRig rig(GetParam(), shape(octahedron(0.2f)), shape(gen::box({1, 1, 1})));
+  const StepResult r = rig.step(at(0, 1, 0), Pose{});  // vertices (±0.2, 1, 0), (0, 1, ±0.2) lie on y = 1
+  bool below = false;
+  for (const Contact& c : r.contacts) {
+    EXPECT_TRUE(std::isfinite(c.depth) && c.depth >= 0);
+    EXPECT_TRUE(c.normal.allFinite());
+    below = below || (c.source == Side::a && c.vertex == 3);  // (0, 0.8, 0): inside, leaves through y = 1
+  }
+  EXPECT_TRUE(below);
+}
+
+TEST_P(Robustness, ZeroAreaAndSliverTrianglesInTheTarget) {
+  MeshOptions keep;
+  keep.allow_zero_area = true;
+  const Mesh zero = cube_with_fan({1, 0, -1}, keep);  // the centre on the edge z = -1: one triangle of zero area
+  EXPECT_EQ(zero.report().zero_area_triangles, 1u);
+  EXPECT_THROW(cube_with_fan({1, 0, -1}, {}), MeshError);
+  const Mesh sliver = cube_with_fan({1, 0, -1 + 1e-5f}, {});
+  for (const Mesh* m : {&zero, &sliver}) EXPECT_EQ(misses_inside(GetParam(), shape(*m), Pose{}, 0.7), 0u);
+}
+
+// Coincident faces: vertices exactly on the other body's surface. With no
+// motion the contacts do not flicker from one step to the next.
+TEST_P(Robustness, RestingContactDoesNotFlicker) {
+  PairRig rig(GetParam(), shape(gen::box({0.5, 0.5, 0.5})), shape(gen::concave_blob(902, 3, 1.0)));
+  const Pose b = at(Vector3d(1.2, 0.1, 0.0), Eigen::Quaterniond(0.9, 0.1, 0.3, 0.2));
+  const auto first = penetrating(rig.step(Pose{}, b));
+  ASSERT_FALSE(first.empty());
+  for (int step = 0; step < 5; ++step) EXPECT_EQ(penetrating(rig.step(Pose{}, b)), first) << "step " << step;
+
+  PairRig cubes(GetParam(), shape(gen::box({0.5, 0.5, 0.5})), shape(gen::box({0.5, 0.5, 0.5})));
+  const auto touching = penetrating(cubes.step(Pose{}, at(1, 0, 0)));
+  for (int step = 0; step < 5; ++step) EXPECT_EQ(penetrating(cubes.step(Pose{}, at(1, 0, 0))), touching);
+}
+
+TEST_P(Robustness, OneBodyWhollyInsideTheOther) {
+  auto small = shape(gen::concave_blob(902, 4, 0.15)), big = shape(gen::concave_blob(902, 5, 1.0));
+  PairRig rig(GetParam(), small, big);
+  const Pose a = at(Vector3d(0.05, -0.02, 0.03), Eigen::Quaterniond(0.7, 0.1, -0.5, 0.3));
+  const StepResult r = rig.step(a, Pose{});
+  const oracle::ExactShape exact(big);
+  const auto truth = exact.rays_from(*small, a, Pose{}, 1e-6);
+  for (const auto& t : truth) ASSERT_TRUE(t.deep()) << "the small body is not wholly inside";
+  size_t from_a = 0;
+  for (const Contact& c : r.contacts) {
+    if (c.source != Side::a) continue;
+    ++from_a;
+    ASSERT_TRUE(truth[c.vertex].inside);
+    EXPECT_NEAR(c.depth, truth[c.vertex].depth, 1e-6);
+  }
+  EXPECT_EQ(from_a, small->sources().origins.size());
+}
+
+TEST_P(Robustness, PlateThinnerThanDistanceExtension) {
+  Family f = family("thin plate", gen::concave_blob(902, 6, 0.6), gen::box({1, 1, 0.005}), 1.5);
+  f.thinnest = 0.01;
+  expect_exact(GetParam(), f, 300);
+}
+
+TEST_P(Robustness, TinyHugeAndFarBodies) {
+  for (double s : {1e-4, 1e4}) {
+    SCOPED_TRACE(s);
+    Family f = family("scaled", scaled(gen::concave_blob(902, 8, 0.6), s), scaled(gen::torus(1, 0.35, 48, 24), s),
+                      1.8 * s);
+    expect_exact(GetParam(), f, 200);
+  }
+  Family far = family("far", gen::concave_blob(902, 8, 0.6), gen::concave_blob(902, 9, 1.0), 2.0);
+  far.origin = {1e6, -1e6, 1e6};
+  expect_exact(GetParam(), far, 200);
+}
+
+TEST_P(Robustness, HighResolutionTarget) {
+  Mesh big = gen::concave_blob(100'000, 10, 1.0);
+  ASSERT_GE(big.triangle_count(), 100'000u);
+  // Few pairs: the basic backend tests every ray against all 100k triangles.
+  expect_exact(GetParam(), family("100k", gen::concave_blob(902, 11, 0.5), std::move(big), 1.6), 16);
+}
+
+// An open target makes no inside claim of its own, but rays that cross it
+// from behind are still reported, with finite values; non-manifold input is
+// a clear error.
+TEST_P(Robustness, OpenAndNonManifoldMeshes) {
+  PairRig rig(GetParam(), shape(gen::concave_blob(902, 12, 0.5)), shape(gen::open_sheet(16, 3.0, 0.1)));
+  for (int step = 0; step < 3; ++step) {
+    const StepResult r = rig.step(at(0, 0, 0.1 * step), Pose{});
+    for (const Contact& c : r.contacts) EXPECT_TRUE(std::isfinite(c.depth) && c.depth >= 0);
+  }
+  std::vector<Vector3f> p = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}};
+  try {
+    Mesh({p.begin(), p.end()}, {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}});  // edge (0, 1) in three triangles
+    FAIL() << "a non-manifold edge was accepted";
+  } catch (const MeshError& e) {
+    EXPECT_EQ(e.kind(), MeshErrorKind::non_manifold_edge);
+  }
+}
+
+// A walk into the U's concavity: it ends with an explicit status within its
+// step limit, and the next full step restores the exact contacts.
+TEST_P(Robustness, ConcaveTrapForTheWalk) {
+  Config c;
+  c.mode = Mode::iterative;
+  c.max_walk_steps = 4;
+  PairRig rig(GetParam(), shape(gen::box({0.3, 0.3, 0.3})), shape(gen::u_shape(1.0)), c);
+  rig.step(at(1.0, 0.5, 0), Pose{});
+  for (double y = 0.5; y < 1.2; y += 0.1) {
+    const StepResult r = rig.step(at(1.0 - y, 0.5, 0), Pose{});
+    EXPECT_LE(r.stats.walk_steps, size_t(c.max_walk_steps) * r.stats.rays_iterative);
+  }
+  Config full = c;
+  full.mode = Mode::full;
+  PairRig fresh(GetParam(), shape(gen::box({0.3, 0.3, 0.3})), shape(gen::u_shape(1.0)), full);
+  EXPECT_FALSE(fresh.step(at(0.0, 0.5, 0), Pose{}).contacts.empty());
+}
+
+// Equation 2.1 through the narrow phase: a pair turned by a tiny angle stays
+// iterative, and q and -q give the same step.
+TEST_P(Robustness, RotationsNearZeroAndHalfTurnAndNegatedQuaternion) {
+  auto a = shape(gen::concave_blob(902, 13, 0.6)), b = shape(gen::concave_blob(902, 14, 1.0));
+  for (double angle : {1e-7, M_PI - 1e-7}) {
+    const Eigen::Quaterniond q(Eigen::AngleAxisd(angle, Vector3d(0.3, 0.4, 0.5).normalized()));
+    PairRig plus(GetParam(), a, b), minus(GetParam(), a, b);
+    const Pose pa = at(Vector3d(1.1, 0.2, 0), q), na = at(Vector3d(1.1, 0.2, 0), Eigen::Quaterniond(-q.coeffs()));
+    const StepResult x = plus.step(pa, Pose{}), y = minus.step(na, Pose{});
+    ASSERT_EQ(x.contacts.size(), y.contacts.size());
+    for (size_t k = 0; k < x.contacts.size(); ++k) EXPECT_NEAR(x.contacts[k].depth, y.contacts[k].depth, 1e-9);
+    // The same pose again, and as -q: no motion, so the pair walks.
+    EXPECT_EQ(plus.step(na, Pose{}).pairs[0].mode, PairMode::iterative);
+  }
+}
+
+// Bit for bit across runs and thread counts, on a batch of random pairs.
+TEST_P(Robustness, DeterministicAcrossRunsAndThreadCounts) {
+  const Family f = validation::make_family("concave");
+  auto run = [&](bool one_thread) {
+    validation::RunOptions o;
+    o.backend = GetParam();
+    o.pairs = 100;
+    o.with_oracles = false;
+    o.single_thread = one_thread;
+    return validation::run_family(f, o);
+  };
+  const auto a = run(true), b = run(false), c = run(false);
+  for (const auto* other : {&b, &c}) {
+    EXPECT_EQ(a.summary.deep, other->summary.deep);
+    EXPECT_EQ(a.summary.max_depth_error, other->summary.max_depth_error);
+    EXPECT_EQ(a.summary.mean_depth_error, other->summary.mean_depth_error);
+    EXPECT_EQ(a.summary.depth_checked, other->summary.depth_checked);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, Robustness, ::testing::ValuesIn(usable_backends()),
+                         [](const auto& info) { return info.param; });
+
+}  // namespace
+}  // namespace rtcd::test
