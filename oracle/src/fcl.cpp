@@ -5,19 +5,12 @@
 #include <cmath>
 #include <variant>
 
+#include "overloaded.hpp"
 #include "rtcd/oracle/third_party.hpp"
 
 namespace rtcd::oracle {
 
 namespace {
-
-template <class... F>
-struct overloaded : F... {
-  using F::operator()...;
-};
-// Explicit guide: clang before 17 has no CTAD for aggregates.
-template <class... F>
-overloaded(F...) -> overloaded<F...>;
 
 std::shared_ptr<fcl::CollisionGeometryd> make_geometry(const Shape& shape) {
   return std::visit(

@@ -7,19 +7,12 @@
 
 #include <variant>
 
+#include "overloaded.hpp"
 #include "rtcd/oracle/third_party.hpp"
 
 namespace rtcd::oracle {
 
 namespace {
-
-template <class... F>
-struct overloaded : F... {
-  using F::operator()...;
-};
-// Explicit guide: clang before 17 has no CTAD for aggregates.
-template <class... F>
-overloaded(F...) -> overloaded<F...>;
 
 // One dispatcher per thread, made on first use: building the configuration
 // allocates its pools, far too costly per query. Sequential queries on
