@@ -4,6 +4,8 @@
 // accepted failure; a loaded mesh must hold together (indices, adjacency,
 // unit normals).
 #include <cstdint>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -60,10 +62,14 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   rtcd::MeshOptions options;
   options.allow_zero_area = (selector >> 2) & 1;
+  static const bool verbose = std::getenv("RTCD_FUZZ_VERBOSE") != nullptr;
   try {
-    check_mesh(rtcd::Mesh::load(path, options));
-  } catch (const rtcd::MeshError&) {
+    const rtcd::Mesh mesh = rtcd::Mesh::load(path, options);
+    check_mesh(mesh);
+    if (verbose) std::fprintf(stderr, "loaded %zu vertices, %zu triangles\n", mesh.vertex_count(), mesh.triangle_count());
+  } catch (const rtcd::MeshError& e) {
     // Unreadable or invalid files are rejected by design.
+    if (verbose) std::fprintf(stderr, "MeshError: %s\n", e.what());
   }
   std::error_code ec;
   std::filesystem::remove(path, ec);

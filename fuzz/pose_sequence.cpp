@@ -6,6 +6,7 @@
 // every step must satisfy fuzz/invariants.hpp.
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -23,6 +24,8 @@ namespace {
 using namespace rtcd;
 
 tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+
+const bool verbose = std::getenv("RTCD_FUZZ_VERBOSE") != nullptr;
 
 // Built once: the Embree scenes of two 902-triangle meshes cost more than a step.
 struct Rig {
@@ -50,8 +53,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   bool valid = true;
   try {
     steps = cli::read_sequence(path.string());
-  } catch (const Error&) {
+  } catch (const Error& e) {
     valid = false;  // malformed sequences are rejected by design
+    if (verbose) std::fprintf(stderr, "%s\n", e.what());
   }
   std::error_code ec;
   std::filesystem::remove(path, ec);
@@ -67,6 +71,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     rig.narrow->detect(std::span(&rig.pair, 1), out);
     fuzz::check_step(rig.narrow->name() + " step " + std::to_string(s), out, rig.pair, *rig.shape_a, *rig.shape_b,
                      rig.narrow->config());
+    if (verbose)
+      std::fprintf(stderr, "step %zu: %s, %zu contacts, %zu predictive\n", s, to_string(out.pairs[0].mode),
+                   out.contacts.size(), out.predictive.size());
   }
   return 0;
 }

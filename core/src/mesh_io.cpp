@@ -40,9 +40,20 @@ Mesh Mesh::load(const std::filesystem::path& path, MeshOptions options) {
   if (!std::filesystem::is_regular_file(path, ec)) file_error(path, "no such file");
 
   Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path.string(), 0);
+  if (scene == nullptr) file_error(path, std::string("cannot read: ") + importer.GetErrorString());
+  // Points and lines are no surface. Rejected before post-processing: a face
+  // of no corners (a truncated OFF file) gets flagged a polygon, and
+  // triangulating it fails an assertion that aborts the process (Debian's
+  // assimp 5.2 is built with ai_assert on).
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+    for (unsigned f = 0; f < scene->mMeshes[m]->mNumFaces; ++f)
+      if (const unsigned n = scene->mMeshes[m]->mFaces[f].mNumIndices; n < 3)
+        file_error(path, "face " + std::to_string(f) + " of mesh " + std::to_string(m) + " has " + std::to_string(n) +
+                             " corners; only polygons of three or more are surfaces");
   // Triangulate polygons; keep every triangle as written (no degenerate
   // removal, no vertex joining: validation must see the file as it is).
-  const aiScene* scene = importer.ReadFile(path.string(), aiProcess_Triangulate | aiProcess_PreTransformVertices);
+  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices);
   if (scene == nullptr) file_error(path, std::string("cannot read: ") + importer.GetErrorString());
   if (scene->mNumMeshes == 0) file_error(path, "file holds no mesh");
 

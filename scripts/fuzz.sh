@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses (preset fuzz: clang, ASan, UBSan) and, for
+# each, replays its saved regressions once, then fuzzes for FUZZ_SECONDS
+# (default 60; 0 replays only) on a scratch copy of its seed corpus, so the
+# committed corpus never grows. Exits non-zero when any harness crashes;
+# crashing inputs are kept under build/fuzz/artifacts/<harness>/.
+#   scripts/fuzz.sh                      # every harness
+#   FUZZ_SECONDS=600 scripts/fuzz.sh mesh_pair
+set -uo pipefail
+cd "$(dirname "$0")/.."
+
+seconds=${FUZZ_SECONDS:-60}
+timeout=${FUZZ_TIMEOUT:-30}  # seconds one input may take before it counts as a hang
+all=(mesh_pair mesh_file pose_sequence)
+if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
+
+cmake --preset fuzz >/dev/null || exit 1
+cmake --build --preset fuzz || exit 1
+
+# UBSan only reports by default: halt, so libFuzzer saves the input.
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
+
+scratch=$(mktemp -d "${TMPDIR:-/tmp}/rtcd_fuzz.XXXXXX")
+trap 'rm -rf "$scratch"' EXIT
+failed=0
+summary=()
+for h in "${harnesses[@]}"; do
+  bin=build/fuzz/fuzz/fuzz_$h
+  if [ ! -x "$bin" ]; then
+    echo "fuzz.sh: no harness '$h' (have: ${all[*]})" >&2
+    exit 2
+  fi
+  artifacts=build/fuzz/artifacts/$h
+  mkdir -p "$artifacts"
+  result=ok
+
+  # Regressions: each saved input once (libFuzzer runs file arguments and stops).
+  regressions=(fuzz/regressions/$h/*)
+  if [ -e "${regressions[0]}" ]; then
+    echo "== $h: ${#regressions[@]} regression input(s)"
+    if ! "$bin" -timeout="$timeout" -artifact_prefix="$artifacts/" "${regressions[@]}" >"$scratch/$h.regressions.log" 2>&1; then
+      tail -n 40 "$scratch/$h.regressions.log"
+      result="regression crashed"
+    fi
+  fi
+
+  runs="-"
+  if [ "$seconds" -gt 0 ] && [ "$result" = ok ]; then
+    echo "== $h: fuzzing ${seconds} s"
+    cp -r "fuzz/corpus/$h" "$scratch/$h"
+    dict=()
+    [ -f "fuzz/$h.dict" ] && dict=(-dict="fuzz/$h.dict")
+    # FUZZ_ARGS: extra libFuzzer flags, e.g. FUZZ_ARGS="-seed=1 -max_len=512".
+    # shellcheck disable=SC2086
+    "$bin" -max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb=4096 -print_final_stats=1 \
+      "${dict[@]}" -artifact_prefix="$artifacts/" ${FUZZ_ARGS:-} "$scratch/$h" >"$scratch/$h.log" 2>&1
+    rc=$?
+    runs=$(grep -o 'Done [0-9]* runs in [0-9]* second(s)' "$scratch/$h.log" | tail -n 1)
+    # A crash ends the run before "Done": count the executions from the final stats.
+    [ -z "$runs" ] && runs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$scratch/$h.log" | sed 's/.*: /crashed after /;s/$/ runs/')
+    [ -n "$runs" ] && echo "$h: $runs"
+    if [ $rc -ne 0 ]; then
+      tail -n 60 "$scratch/$h.log"
+      result="crashed (rc $rc; input saved under $artifacts/)"
+    fi
+  fi
+  [ "$result" = ok ] || failed=1
+  summary+=("$(printf '%-14s %-36s %s' "$h" "${runs:--}" "$result")")
+done
+
+echo
+echo "harness        executions                           result"
+printf '%s\n' "${summary[@]}"
+exit $failed
