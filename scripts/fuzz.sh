@@ -19,6 +19,8 @@ cmake --build --preset fuzz || exit 1
 
 # UBSan only reports by default: halt, so libFuzzer saves the input.
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
+# A leak inside assimp's PLY reader is not ours (fuzz/lsan.supp says which).
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp}
 
 scratch=$(mktemp -d "${TMPDIR:-/tmp}/rtcd_fuzz.XXXXXX")
 trap 'rm -rf "$scratch"' EXIT

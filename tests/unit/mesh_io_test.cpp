@@ -94,6 +94,16 @@ TEST_F(MeshFiles, MissingFile) { expect_file_error(dir_ / "nope.obj", "no such f
 TEST_F(MeshFiles, UnsupportedExtension) { expect_file_error(write("box.xyz", "1 2 3"), "unsupported"); }
 TEST_F(MeshFiles, GarbageContent) { expect_file_error(write("bad.off", "this is not a mesh\n"), "bad.off"); }
 
+// Files that crash or hang assimp 5.2 are rejected before it reads them.
+TEST_F(MeshFiles, OffLinesMustMatchItsHeader) {
+  expect_file_error(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n"), "declares 3 vertices and 1 faces");
+  expect_file_error(write("index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "line 6: face 0");
+  expect_file_error(write("corners.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n"), "corner count >= 3");
+}
+TEST_F(MeshFiles, PlyWithoutEndHeader) {
+  expect_file_error(write("open.ply", "ply\nformat ascii 1.0\n"), "no end_header");
+}
+
 TEST_F(MeshFiles, ValidationErrorsNameTheFile) {
   // An OFF whose third face is wound against the others.
   std::string text = off_text(box_);
