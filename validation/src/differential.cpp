@@ -95,6 +95,7 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   s.pairs = options.pairs;
   s.seed = options.seed;
   s.epsilon = epsilon;
+  s.with_oracles = options.with_oracles;
 
   // Our backend: every pair in one batch, as a host would step them.
   auto narrow = make_narrow_phase(options.backend, config);
@@ -251,6 +252,7 @@ nlohmann::json to_json(const Summary& s) {
           {"false_rays", s.false_rays},
           {"depth_checked", s.depth_checked},
           {"depth_error", {{"max", s.max_depth_error}, {"mean", s.mean_depth_error}, {"max_relative", s.max_relative_depth_error}}},
+          {"oracles", s.with_oracles},
           {"fcl", {{"checked", s.fcl_checked}, {"agreement", s.fcl_agreement()}, {"contained", s.contained},
                    {"blind_contained", s.fcl_blind_contained}, {"edge_edge", s.edge_edge}, {"edge_edge_rate", s.edge_edge_rate()}}},
           {"gimpact", {{"pairs_run", s.gimpact_runs}, {"checked", s.gimpact_checked}, {"agreement", s.gimpact_agreement()}}},

@@ -67,6 +67,7 @@ struct Summary {
   uint64_t seed = 0;
   double epsilon = 0.0;
   size_t iterative_pairs = 0;
+  bool with_oracles = false;  // FCL, GIMPACT, libccd ran: their fields mean something
   size_t deep = 0, missed = 0, missed_untracked = 0, far_outside = 0, false_rays = 0, depth_checked = 0;
   double max_depth_error = 0.0, max_relative_depth_error = 0.0, mean_depth_error = 0.0;
   double missed_p50 = 0.0, missed_p90 = 0.0, missed_p99 = 0.0, missed_max = 0.0;  // per colliding pair
