@@ -28,6 +28,8 @@ struct Case {
   RunMode mode;
 };
 
+void PrintTo(const Case& c, std::ostream* os) { *os << c.family << '/' << c.backend << '/' << to_string(c.mode); }
+
 std::vector<Case> all_cases() {
   std::vector<Case> cases;
   for (const auto& backend : test::usable_backends())
