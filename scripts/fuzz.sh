@@ -15,7 +15,9 @@ all=(mesh_pair mesh_file pose_sequence)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
 cmake --preset fuzz >/dev/null || exit 1
-cmake --build --preset fuzz || exit 1
+targets=()
+for h in "${harnesses[@]}"; do targets+=("rtcd_fuzz_$h"); done
+cmake --build --preset fuzz --target "${targets[@]}" || exit 1  # the harnesses only
 
 # UBSan only reports by default: halt, so libFuzzer saves the input.
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
