@@ -38,7 +38,8 @@ void check_off(const std::filesystem::path& path, std::istream& in) {
     numbers.push_back(n);
   }
   auto bad = [&](size_t i, const std::string& what) {
-    file_error(path, "line " + std::to_string(i < numbers.size() ? numbers[i] : numbers.back() + 1) + ": " + what);
+    const size_t line_number = i < numbers.size() ? numbers[i] : (numbers.empty() ? 1 : numbers.back() + 1);
+    file_error(path, "line " + std::to_string(line_number) + ": " + what);
   };
   auto integer = [](const std::string& t, long long& v) {
     const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);

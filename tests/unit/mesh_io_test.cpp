@@ -96,6 +96,7 @@ TEST_F(MeshFiles, GarbageContent) { expect_file_error(write("bad.off", "this is 
 
 // Files that crash or hang assimp 5.2 are rejected before it reads them.
 TEST_F(MeshFiles, OffLinesMustMatchItsHeader) {
+  expect_file_error(write("empty.off", ""), "line 1: an OFF file starts with OFF");
   expect_file_error(write("short.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n"), "declares 3 vertices and 1 faces");
   expect_file_error(write("index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "line 6: face 0");
   expect_file_error(write("corners.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n"), "corner count >= 3");
