@@ -4,7 +4,7 @@
 set -euo pipefail
 packages=(
   cmake ninja-build g++ clang libclang-rt-14-dev pkg-config
-  libeigen3-dev libtbb-dev libembree-dev libassimp-dev
+  libeigen3-dev libtbb-dev libembree-dev libassimp-dev libtinyobjloader-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   libfcl-dev libccd-dev libbullet-dev python3-matplotlib

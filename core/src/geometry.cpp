@@ -91,7 +91,7 @@ const char* to_string(MeshErrorKind kind) {
     case MeshErrorKind::zero_area_triangle: return "zero_area_triangle";
     case MeshErrorKind::non_manifold_edge: return "non_manifold_edge";
     case MeshErrorKind::inconsistent_winding: return "inconsistent_winding";
-    case MeshErrorKind::unreferenced_vertex: return "unreferenced_vertex";
+    case MeshErrorKind::out_of_range: return "out_of_range";
     case MeshErrorKind::inverted: return "inverted";
     case MeshErrorKind::file: return "file";
   }

@@ -6,10 +6,12 @@
 #include <numbers>
 #include <sstream>
 #include <unordered_map>
+#include <cstring>
 
 #include <Eigen/Geometry>
 
 #include "rtcd/error.hpp"
+#include "topology.hpp"
 
 namespace rtcd {
 namespace {
@@ -21,23 +23,53 @@ namespace {
   throw MeshError(kind, vertex, triangle, s.str());
 }
 
-// Vertices of edge e in the numbering of Algorithm 2 (see mesh.hpp).
-std::array<uint32_t, 2> edge_vertices(const Mesh::Triangle& t, int e) {
-  switch (e) {
-    case 0: return {t[2], t[0]};
-    case 1: return {t[0], t[1]};
-    default: return {t[1], t[2]};
-  }
-}
-
 // Twice the area below which a triangle counts as zero-area, relative to its
 // longest edge squared: below float resolution of its own vertices.
 constexpr double kZeroAreaRelative = 1e-7;
 
 }  // namespace
 
+std::vector<uint32_t> coincident_representatives(std::span<const Eigen::Vector3f> positions) {
+  struct Key {
+    uint32_t bits[3];
+    bool operator==(const Key& o) const { return std::memcmp(bits, o.bits, sizeof bits) == 0; }
+  };
+  struct Hash {
+    size_t operator()(const Key& k) const {
+      return (size_t(k.bits[0]) * 73856093u) ^ (size_t(k.bits[1]) * 19349663u) ^ (size_t(k.bits[2]) * 83492791u);
+    }
+  };
+  std::unordered_map<Key, uint32_t, Hash> first;
+  first.reserve(positions.size());
+  std::vector<uint32_t> out(positions.size());
+  for (uint32_t v = 0; v < positions.size(); ++v) {
+    const float xyz[3] = {positions[v].x() + 0.0f, positions[v].y() + 0.0f, positions[v].z() + 0.0f};  // -0 -> 0
+    Key key;
+    std::memcpy(key.bits, xyz, sizeof xyz);
+    out[v] = first.try_emplace(key, v).first->second;
+  }
+  return out;
+}
+
+void weld_coincident(std::vector<Eigen::Vector3f>& positions, std::vector<Mesh::Triangle>& triangles) {
+  const std::vector<uint32_t> rep = coincident_representatives(positions);
+  std::vector<uint32_t> new_id(positions.size());
+  std::vector<Eigen::Vector3f> kept;
+  for (uint32_t v = 0; v < positions.size(); ++v) {
+    if (rep[v] == v) {
+      new_id[v] = uint32_t(kept.size());
+      kept.push_back(positions[v]);
+    }
+  }
+  for (auto& t : triangles)
+    for (uint32_t& i : t)
+      if (i < positions.size()) i = new_id[rep[i]];  // an out-of-range index is left for validation to name
+  positions = std::move(kept);
+}
+
 Mesh::Mesh(std::vector<Eigen::Vector3f> positions, std::vector<Triangle> triangles, MeshOptions options)
     : positions_(std::move(positions)), triangles_(std::move(triangles)) {
+  if (options.weld) weld_coincident(positions_, triangles_);
   validate_and_derive(options);
 }
 
@@ -56,6 +88,24 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
         << ", " << positions_[v].z() << ")";
       fail(MeshErrorKind::non_finite_coordinate, v, {}, s.str());
     }
+    if (positions_[v].cwiseAbs().maxCoeff() > kMaxCoordinate) {
+      std::ostringstream s;
+      s << "vertex " << v << " at (" << positions_[v].x() << ", " << positions_[v].y() << ", " << positions_[v].z()
+        << ") is beyond the supported coordinate range |x| <= " << kMaxCoordinate
+        << " (single-precision ray tests overflow there); move the body's origin or rescale it";
+      fail(MeshErrorKind::out_of_range, v, {}, s.str());
+    }
+  }
+
+  for (const auto& p : positions_) {
+    bounds_.extend(p.cast<double>());
+    radius_ = std::max(radius_, p.cast<double>().norm());
+  }
+  if (const double size = (bounds_.max - bounds_.min).norm(); size < kMinBodySize) {
+    std::ostringstream s;
+    s << "the mesh spans " << size << ", below the smallest supported body size " << kMinBodySize
+      << " (single-precision ray tests underflow); rescale it";
+    fail(MeshErrorKind::out_of_range, {}, {}, s.str());
   }
 
   std::vector<uint8_t> used(nv, 0);
@@ -75,7 +125,7 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
     }
   }
   for (uint32_t v = 0; v < nv; ++v)
-    if (!used[v]) fail(MeshErrorKind::unreferenced_vertex, v, {}, "vertex " + std::to_string(v) + " is used by no triangle");
+    if (!used[v]) ++report_.unreferenced_vertices;
 
   // Triangle normals and zero-area detection, in double.
   triangle_normals_.assign(nt, Eigen::Vector3f::Zero());
@@ -102,42 +152,34 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
     triangle_normals_[t] = normals_d[t].cast<float>();
   }
 
-  // Edge adjacency: each undirected edge may be used twice, once per direction.
-  struct EdgeUse {
-    uint32_t triangle;
-    int edge;
-    uint32_t from;
-  };
-  std::unordered_map<uint64_t, std::array<EdgeUse, 2>> edges;
-  std::unordered_map<uint64_t, int> counts;
-  edges.reserve(nt * 2);
-  counts.reserve(nt * 2);
+  // Edge adjacency: an edge is shared by at most two triangles, which run it
+  // in opposite directions. Of several faults, the lowest triangle is named.
   neighbors_.assign(nt, {no_neighbor, no_neighbor, no_neighbor});
-  for (uint32_t t = 0; t < nt; ++t) {
-    for (int e = 0; e < 3; ++e) {
-      const auto [from, to] = edge_vertices(triangles_[t], e);
-      const uint64_t key = (uint64_t(std::min(from, to)) << 32) | std::max(from, to);
-      int& count = counts[key];
-      if (count == 2)
-        fail(MeshErrorKind::non_manifold_edge, from, t,
-             "edge (" + std::to_string(from) + ", " + std::to_string(to) + ") of triangle " + std::to_string(t) +
-                 " is shared by more than two triangles");
-      if (count == 1) {
-        const EdgeUse& first = edges[key][0];
-        if (first.from == from)
-          fail(MeshErrorKind::inconsistent_winding, from, t,
-               "triangle " + std::to_string(t) + " runs edge (" + std::to_string(from) + ", " +
-                   std::to_string(to) + ") in the same direction as triangle " + std::to_string(first.triangle) +
-                   ": winding is inconsistent");
-        neighbors_[t][e] = int32_t(first.triangle);
-        neighbors_[first.triangle][first.edge] = int32_t(t);
-      }
-      edges[key][count] = {t, e, from};
-      ++count;
+  const topology::HalfEdge* fault = nullptr;
+  bool fault_non_manifold = false;
+  topology::for_each_edge(topology::half_edges(triangles_), [&](std::span<const topology::HalfEdge> uses) {
+    const topology::HalfEdge* culprit = nullptr;
+    if (uses.size() > 2) culprit = &uses[2];
+    else if (uses.size() == 2 && uses[0].from == uses[1].from) culprit = &uses[1];
+    if (culprit != nullptr && (fault == nullptr || culprit->triangle < fault->triangle)) {
+      fault = culprit;
+      fault_non_manifold = uses.size() > 2;
     }
+    if (uses.size() == 1) ++report_.boundary_edges;
+    if (uses.size() == 2) {
+      neighbors_[uses[0].triangle][uses[0].edge] = int32_t(uses[1].triangle);
+      neighbors_[uses[1].triangle][uses[1].edge] = int32_t(uses[0].triangle);
+    }
+  });
+  if (fault != nullptr) {
+    const std::string edge = "edge (" + std::to_string(fault->from) + ", " + std::to_string(fault->to) + ")";
+    if (fault_non_manifold)
+      fail(MeshErrorKind::non_manifold_edge, fault->from, fault->triangle,
+           edge + " of triangle " + std::to_string(fault->triangle) + " is shared by more than two triangles");
+    fail(MeshErrorKind::inconsistent_winding, fault->from, fault->triangle,
+         "triangle " + std::to_string(fault->triangle) + " runs " + edge +
+             " in the same direction as another triangle: winding is inconsistent");
   }
-  for (const auto& [key, count] : counts)
-    if (count == 1) ++report_.boundary_edges;
   if (!report_.open() && signed_volume6 < 0.0)
     fail(MeshErrorKind::inverted, {}, {}, "closed mesh has negative volume: its triangles face inward");
 
@@ -159,11 +201,6 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
     // has no direction to cast along: it casts no ray (zero normal).
     const double len = vn[v].norm();
     vertex_normals_[v] = len > 0 ? Eigen::Vector3f((vn[v] / len).cast<float>()) : Eigen::Vector3f::Zero();
-  }
-
-  for (const auto& p : positions_) {
-    bounds_.extend(p.cast<double>());
-    radius_ = std::max(radius_, p.cast<double>().norm());
   }
 }
 

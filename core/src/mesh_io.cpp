@@ -1,4 +1,5 @@
-// Mesh files: OBJ, OFF, PLY and STL read through assimp; OBJ written.
+// Mesh files as their authors wrote them: OBJ (tinyobjloader), OFF (read
+// here), PLY and STL (assimp); OBJ written.
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
@@ -8,8 +9,8 @@
 #include <unordered_map>
 
 #include <assimp/Importer.hpp>
-#include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <tiny_obj_loader.h>
 
 #include "rtcd/error.hpp"
 #include "rtcd/mesh.hpp"
@@ -21,12 +22,14 @@ namespace {
   throw MeshError(MeshErrorKind::file, {}, {}, path.string() + ": " + what);
 }
 
-// Debian's assimp 5.2 crashes on OFF files whose lines do not match their
-// header's counts and loops forever on a PLY header with no end_header; such
-// files are rejected here, before assimp reads them, naming the line.
-void check_off(const std::filesystem::path& path, std::istream& in) {
-  std::vector<std::vector<std::string>> lines;  // tokens of each non-empty, non-comment line
-  std::vector<size_t> numbers;                   // their line numbers in the file
+// Tokens of each non-empty line with comments cut, and the line numbers.
+struct Lines {
+  std::vector<std::vector<std::string>> tokens;
+  std::vector<size_t> numbers;
+};
+
+Lines read_lines(std::istream& in) {
+  Lines out;
   std::string line;
   for (size_t n = 1; std::getline(in, line); ++n) {
     if (const auto hash = line.find('#'); hash != std::string::npos) line.resize(hash);
@@ -34,20 +37,36 @@ void check_off(const std::filesystem::path& path, std::istream& in) {
     std::vector<std::string> tokens;
     for (std::string w; words >> w;) tokens.push_back(w);
     if (tokens.empty()) continue;
-    lines.push_back(std::move(tokens));
-    numbers.push_back(n);
+    out.tokens.push_back(std::move(tokens));
+    out.numbers.push_back(n);
   }
+  return out;
+}
+
+// Appends the fan of one face, (c0, ck, ck+1), to the triangle list.
+void add_face(MeshData& data, std::span<const uint32_t> corners) {
+  for (size_t k = 1; k + 1 < corners.size(); ++k) data.triangles.push_back({corners[0], corners[k], corners[k + 1]});
+}
+
+// OFF, read here: assimp 5.2 renumbers its vertices and crashes on files
+// whose lines do not match the header. Every line is checked and named.
+MeshData read_off(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) file_error(path, "cannot open");
+  const Lines file = read_lines(in);
+  const auto& lines = file.tokens;
   auto bad = [&](size_t i, const std::string& what) {
-    const size_t line_number = i < numbers.size() ? numbers[i] : (numbers.empty() ? 1 : numbers.back() + 1);
+    const size_t line_number =
+        i < file.numbers.size() ? file.numbers[i] : (file.numbers.empty() ? 1 : file.numbers.back() + 1);
     file_error(path, "line " + std::to_string(line_number) + ": " + what);
   };
   auto integer = [](const std::string& t, long long& v) {
     const auto [end, ec] = std::from_chars(t.data(), t.data() + t.size(), v);
     return ec == std::errc() && end == t.data() + t.size();
   };
-  auto real = [](const std::string& t) {
+  auto real = [](const std::string& t, float& v) {
     char* end = nullptr;
-    std::strtod(t.c_str(), &end);
+    v = std::strtof(t.c_str(), &end);
     return !t.empty() && end == t.c_str() + t.size();
   };
   if (lines.empty() || lines[0][0].find("OFF") == std::string::npos) bad(0, "an OFF file starts with OFF");
@@ -63,112 +82,150 @@ void check_off(const std::filesystem::path& path, std::istream& in) {
   if (lines.size() - i < size_t(vertices) + size_t(faces))
     bad(lines.size(), "the header declares " + std::to_string(vertices) + " vertices and " + std::to_string(faces) +
                           " faces; the file has " + std::to_string(lines.size() - i) + " lines after it");
-  for (long long v = 0; v < vertices; ++v, ++i)
-    if (lines[i].size() < 3 || !real(lines[i][0]) || !real(lines[i][1]) || !real(lines[i][2]))
+  MeshData data;
+  data.positions.reserve(size_t(vertices));
+  for (long long v = 0; v < vertices; ++v, ++i) {
+    Eigen::Vector3f p;
+    if (lines[i].size() < 3 || !real(lines[i][0], p.x()) || !real(lines[i][1], p.y()) || !real(lines[i][2], p.z()))
       bad(i, "vertex " + std::to_string(v) + ": expected three numbers");
+    data.positions.push_back(p);
+  }
+  std::vector<uint32_t> corners;
   for (long long f = 0; f < faces; ++f, ++i) {
-    long long corners = 0;
-    if (!integer(lines[i][0], corners) || corners < 3 || lines[i].size() < size_t(corners) + 1)
+    long long count = 0;
+    if (!integer(lines[i][0], count) || count < 3 || lines[i].size() < size_t(count) + 1)
       bad(i, "face " + std::to_string(f) + ": expected a corner count >= 3 and that many vertex indices");
-    for (long long k = 1; k <= corners; ++k) {
+    corners.clear();
+    for (long long k = 1; k <= count; ++k) {
       long long index = 0;
       if (!integer(lines[i][size_t(k)], index) || index < 0 || index >= vertices)
         bad(i, "face " + std::to_string(f) + ": '" + lines[i][size_t(k)] + "' is not a vertex index below " +
                    std::to_string(vertices));
+      corners.push_back(uint32_t(index));
     }
+    add_face(data, corners);
   }
+  return data;
 }
 
-void check_ply(const std::filesystem::path& path, std::istream& in) {
+// OBJ through tinyobjloader, which keeps the file's vertex list and indices
+// (assimp gives every face corner a vertex of its own).
+MeshData read_obj(const std::filesystem::path& path) {
+  tinyobj::ObjReaderConfig config;
+  config.triangulate = false;  // fanned below, the same way for every format
+  config.vertex_color = false;
+  config.mtl_search_path = path.parent_path().string();
+  tinyobj::ObjReader reader;
+  if (!reader.ParseFromFile(path.string(), config)) {
+    std::string what = reader.Error();
+    while (!what.empty() && (what.back() == '\n' || what.back() == '\r')) what.pop_back();
+    file_error(path, "cannot read: " + (what.empty() ? std::string("not an OBJ file") : what));
+  }
+  MeshData data;
+  const auto& v = reader.GetAttrib().vertices;
+  data.positions.reserve(v.size() / 3);
+  for (size_t i = 0; i + 2 < v.size(); i += 3) data.positions.emplace_back(v[i], v[i + 1], v[i + 2]);
+  size_t face_number = 0;
+  std::vector<uint32_t> corners;
+  for (const auto& shape : reader.GetShapes()) {
+    size_t next = 0;
+    for (const unsigned char count : shape.mesh.num_face_vertices) {
+      const std::string where = "face " + std::to_string(face_number++);
+      if (count < 3 || next + count > shape.mesh.indices.size())
+        file_error(path, where + " has " + std::to_string(count) + " corners; only polygons of three or more are surfaces");
+      corners.clear();
+      for (size_t k = 0; k < count; ++k) {
+        const int index = shape.mesh.indices[next + k].vertex_index;
+        if (index < 0 || size_t(index) >= data.positions.size())
+          file_error(path, where + " uses vertex " + std::to_string(index) + " of " +
+                               std::to_string(data.positions.size()));
+        corners.push_back(uint32_t(index));
+      }
+      next += count;
+      add_face(data, corners);
+    }
+  }
+  return data;
+}
+
+// The vertex count a PLY header declares; the header must end (assimp 5.2
+// loops forever on one that does not).
+size_t ply_vertex_count(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) file_error(path, "cannot open");
   std::string line;
+  long long vertices = -1;
   for (size_t n = 1; n <= 10000 && std::getline(in, line); ++n) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line == "end_header") return;
+    std::istringstream words(line);
+    std::string keyword, element;
+    long long count = 0;
+    if (words >> keyword >> element >> count && keyword == "element" && element == "vertex") vertices = count;
+    if (line == "end_header") {
+      if (vertices < 0) file_error(path, "PLY header declares no vertex element");
+      return size_t(vertices);
+    }
   }
   file_error(path, "PLY header has no end_header line");
 }
 
-struct PositionKey {
-  uint32_t bits[3];
-  bool operator==(const PositionKey& o) const { return std::memcmp(bits, o.bits, sizeof bits) == 0; }
-};
-struct PositionHash {
-  size_t operator()(const PositionKey& k) const {
-    return (size_t(k.bits[0]) * 73856093u) ^ (size_t(k.bits[1]) * 19349663u) ^ (size_t(k.bits[2]) * 83492791u);
+// PLY and STL through assimp, without post-processing: assimp keeps a PLY's
+// vertex list as written; an STL has one vertex per facet corner.
+MeshData read_with_assimp(const std::filesystem::path& path, bool ply) {
+  const size_t declared_vertices = ply ? ply_vertex_count(path) : 0;
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(path.string(), 0);
+  if (scene == nullptr) file_error(path, std::string("cannot read: ") + importer.GetErrorString());
+  if (scene->mNumMeshes == 0) file_error(path, "file holds no mesh");
+  MeshData data;
+  std::vector<uint32_t> corners;
+  size_t face_number = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* mesh = scene->mMeshes[m];
+    const uint32_t offset = uint32_t(data.positions.size());
+    for (unsigned v = 0; v < mesh->mNumVertices; ++v)
+      data.positions.emplace_back(mesh->mVertices[v].x, mesh->mVertices[v].y, mesh->mVertices[v].z);
+    for (unsigned f = 0; f < mesh->mNumFaces; ++f, ++face_number) {
+      const aiFace& face = mesh->mFaces[f];
+      const std::string where = "face " + std::to_string(face_number);
+      if (face.mNumIndices < 3)
+        file_error(path, where + " has " + std::to_string(face.mNumIndices) +
+                             " corners; only polygons of three or more are surfaces");
+      corners.clear();
+      for (unsigned k = 0; k < face.mNumIndices; ++k) {
+        if (face.mIndices[k] >= mesh->mNumVertices)
+          file_error(path, where + " uses vertex " + std::to_string(face.mIndices[k]) + " of " +
+                               std::to_string(mesh->mNumVertices));
+        corners.push_back(offset + face.mIndices[k]);
+      }
+      add_face(data, corners);
+    }
   }
-};
+  if (ply && data.positions.size() != declared_vertices)
+    file_error(path, "the header declares " + std::to_string(declared_vertices) + " vertices; " +
+                         std::to_string(data.positions.size()) + " were read");
+  if (!ply) weld_coincident(data.positions, data.triangles);
+  return data;
+}
 
 }  // namespace
 
-Mesh Mesh::load(const std::filesystem::path& path, MeshOptions options) {
+MeshData read_mesh_file(const std::filesystem::path& path) {
   std::string ext = path.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
   if (ext != ".obj" && ext != ".off" && ext != ".ply" && ext != ".stl")
     file_error(path, "unsupported mesh format '" + ext + "' (expected .obj, .off, .ply or .stl)");
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) file_error(path, "no such file");
+  MeshData data = ext == ".off" ? read_off(path) : ext == ".obj" ? read_obj(path) : read_with_assimp(path, ext == ".ply");
+  if (data.triangles.empty()) file_error(path, "file holds no faces");
+  return data;
+}
 
-  if (ext == ".off" || ext == ".ply") {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) file_error(path, "cannot open");
-    ext == ".off" ? check_off(path, in) : check_ply(path, in);
-  }
-
-  Assimp::Importer importer;
-  const aiScene* scene = importer.ReadFile(path.string(), 0);
-  if (scene == nullptr) file_error(path, std::string("cannot read: ") + importer.GetErrorString());
-  // Points and lines are no surface, and an index past the vertex array (a
-  // corrupt binary PLY) is no face. Both are rejected before
-  // post-processing, which aborts on the first (an assertion Debian's
-  // assimp 5.2 keeps on) and reads out of bounds on the second.
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f) {
-      const aiFace& face = mesh->mFaces[f];
-      const std::string where = "face " + std::to_string(f) + " of mesh " + std::to_string(m);
-      if (face.mNumIndices < 3)
-        file_error(path, where + " has " + std::to_string(face.mNumIndices) +
-                             " corners; only polygons of three or more are surfaces");
-      for (unsigned k = 0; k < face.mNumIndices; ++k)
-        if (face.mIndices[k] >= mesh->mNumVertices)
-          file_error(path, where + " uses vertex " + std::to_string(face.mIndices[k]) + " of " +
-                               std::to_string(mesh->mNumVertices));
-    }
-  }
-  // Triangulate polygons; keep every triangle as written (no degenerate
-  // removal, no vertex joining: validation must see the file as it is).
-  scene = importer.ApplyPostProcessing(aiProcess_Triangulate | aiProcess_PreTransformVertices);
-  if (scene == nullptr) file_error(path, std::string("cannot read: ") + importer.GetErrorString());
-  if (scene->mNumMeshes == 0) file_error(path, "file holds no mesh");
-
-  std::vector<Eigen::Vector3f> positions;
-  std::vector<Triangle> triangles;
-  std::unordered_map<PositionKey, uint32_t, PositionHash> index_of;
-  size_t face_number = 0;
-  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
-    const aiMesh* mesh = scene->mMeshes[m];
-    for (unsigned f = 0; f < mesh->mNumFaces; ++f, ++face_number) {
-      const aiFace& face = mesh->mFaces[f];
-      if (face.mNumIndices != 3)
-        file_error(path, "face " + std::to_string(face_number) + " has " + std::to_string(face.mNumIndices) +
-                             " corners; only polygons of three or more are surfaces");
-      Triangle tri;
-      for (int k = 0; k < 3; ++k) {
-        const unsigned i = face.mIndices[k];
-        if (i >= mesh->mNumVertices) file_error(path, "face " + std::to_string(face_number) + " has a bad index");
-        const aiVector3D& p = mesh->mVertices[i];
-        PositionKey key;
-        const float xyz[3] = {p.x, p.y, p.z};
-        std::memcpy(key.bits, xyz, sizeof xyz);
-        auto [it, inserted] = index_of.try_emplace(key, uint32_t(positions.size()));
-        if (inserted) positions.emplace_back(p.x, p.y, p.z);
-        tri[k] = it->second;
-      }
-      triangles.push_back(tri);
-    }
-  }
+Mesh Mesh::load(const std::filesystem::path& path, MeshOptions options) {
+  MeshData data = read_mesh_file(path);
   try {
-    return Mesh(std::move(positions), std::move(triangles), options);
+    return Mesh(std::move(data.positions), std::move(data.triangles), options);
   } catch (const MeshError& e) {
     throw MeshError(e.kind(), e.vertex(), e.triangle(), path.string() + ": " + e.what());
   }

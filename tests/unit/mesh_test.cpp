@@ -99,10 +99,49 @@ TEST(MeshValidation, InvertedClosedMesh) {
   expect_error(tet_positions(), t, MeshErrorKind::inverted, "inward");
 }
 
-TEST(MeshValidation, UnreferencedVertex) {
+TEST(MeshValidation, UnreferencedVertexKeepsItsIdAndCastsNoRay) {
   V p = tet_positions();
-  p.push_back({5, 5, 5});
-  expect_error(p, tet_triangles(), MeshErrorKind::unreferenced_vertex, "vertex 4");
+  p.insert(p.begin() + 2, Eigen::Vector3f(5, 5, 5));  // ids 2.. shift by one, as in a file with a stray vertex
+  T t = tet_triangles();
+  for (auto& tri : t)
+    for (uint32_t& i : tri) i += i >= 2;
+  const Mesh m(p, t);
+  EXPECT_EQ(m.vertex_count(), 5u);
+  EXPECT_EQ(m.report().unreferenced_vertices, 1u);
+  EXPECT_TRUE(m.vertex_normals()[2].isZero());
+  EXPECT_FALSE(m.vertex_normals()[3].isZero());
+}
+
+TEST(MeshValidation, CoordinatesBeyondTheSupportedRangeAreRefused) {
+  V p = tet_positions();
+  for (auto& x : p) x *= 2e12f;
+  expect_error(p, tet_triangles(), MeshErrorKind::out_of_range, "vertex 1");
+  p = tet_positions();
+  for (auto& x : p) x *= 1e12f;  // the edge itself is supported
+  EXPECT_NO_THROW(Mesh(p, tet_triangles()));
+  p = tet_positions();
+  for (auto& x : p) x *= 1e-10f;
+  expect_error(p, tet_triangles(), MeshErrorKind::out_of_range, "smallest supported body size");
+}
+
+TEST(MeshValidation, WeldJoinsCoincidentVerticesInFirstOccurrenceOrder) {
+  // The tetrahedron as a soup: every triangle has its own three corners.
+  V soup;
+  T t;
+  for (const auto& tri : tet_triangles()) {
+    t.push_back({uint32_t(soup.size()), uint32_t(soup.size() + 1), uint32_t(soup.size() + 2)});
+    for (uint32_t i : tri) soup.push_back(tet_positions()[i]);
+  }
+  const Mesh unwelded(soup, t);
+  EXPECT_EQ(unwelded.vertex_count(), 12u);
+  EXPECT_EQ(unwelded.report().boundary_edges, 12u);
+  rtcd::MeshOptions weld;
+  weld.weld = true;
+  const Mesh m(soup, t, weld);
+  EXPECT_FALSE(m.report().open());
+  const V p = tet_positions();
+  EXPECT_EQ(V(m.positions().begin(), m.positions().end()), (V{p[0], p[2], p[1], p[3]}));
+  EXPECT_EQ(m.triangles()[0], (Mesh::Triangle{0, 1, 2}));
 }
 
 TEST(MeshValidation, OpenMeshAcceptedAndFlagged) {

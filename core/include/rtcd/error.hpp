@@ -23,7 +23,7 @@ enum class MeshErrorKind {
   zero_area_triangle,
   non_manifold_edge,
   inconsistent_winding,
-  unreferenced_vertex,  // a vertex no triangle uses: it would cast a ray with no normal
+  out_of_range,         // coordinates or size outside what single precision answers (mesh.hpp)
   inverted,             // a closed mesh whose triangles all face inward (negative volume)
   file,  // unreadable or unparsable file
 };

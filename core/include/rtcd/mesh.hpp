@@ -20,12 +20,28 @@ struct MeshOptions {
   // the mesh. They stay in the triangle list, are never hit, and are counted
   // in MeshReport::zero_area_triangles.
   bool allow_zero_area = false;
+  // Join vertices at bit-identical positions (a triangle soup's corners)
+  // into one, numbered in the order of their first occurrence. Off by
+  // default: coincident vertices stay distinct, each with its own fan,
+  // normal and ray, and ids stay the caller's (the file's).
+  bool weld = false;
 };
+
+// The coordinates a mesh may use in its own frame. Beyond the largest, the
+// single-precision ray/triangle test overflows (its distance numerator grows
+// with the cube of the coordinates); below the smallest body size its
+// products underflow. docs/ARCHITECTURE.md ("Sizes") derives both.
+inline constexpr double kMaxCoordinate = 1e12;
+inline constexpr double kMinBodySize = 1e-9;  // bounding-box diagonal
+// Largest ratio of two bodies' bounding radii for which a penetration of
+// 1% of the smaller body is still resolved in the larger body's frame.
+inline constexpr double kMaxSizeRatio = 1e4;
 
 // What validation found that is allowed but worth knowing.
 struct MeshReport {
-  uint32_t boundary_edges = 0;       // edges used by one triangle: the mesh is open
-  uint32_t zero_area_triangles = 0;  // kept because MeshOptions::allow_zero_area
+  uint32_t boundary_edges = 0;         // edges used by one triangle: the mesh is open
+  uint32_t zero_area_triangles = 0;    // kept because MeshOptions::allow_zero_area
+  uint32_t unreferenced_vertices = 0;  // used by no triangle: no normal, no ray
   bool open() const { return boundary_edges > 0; }
 };
 
@@ -43,9 +59,8 @@ class Mesh {
   // vertex or triangle. Nothing is repaired silently.
   Mesh(std::vector<Eigen::Vector3f> positions, std::vector<Triangle> triangles, MeshOptions options = {});
 
-  // Loads OBJ, OFF, PLY or STL through assimp. Corners at bit-identical
-  // positions become one vertex (STL stores none shared); vertex ids follow
-  // their first use by a face. Throws MeshError (kind file) naming the path.
+  // Loads OBJ, OFF, PLY or STL (read_mesh_file) and validates. Vertex and
+  // triangle ids are the file's. Throws MeshError naming the path.
   static Mesh load(const std::filesystem::path& path, MeshOptions options = {});
 
   std::span<const Eigen::Vector3f> positions() const { return positions_; }
@@ -75,6 +90,29 @@ class Mesh {
   double radius_ = 0.0;
   MeshReport report_;
 };
+
+// A mesh file as its author wrote it, before validation. Vertices are the
+// file's vertex list in its order; a face of n corners becomes n - 2
+// consecutive triangles fanned from its first corner, (c0, ck, ck+1) for
+// k = 1 .. n-2, in the file's face order, so a file of triangles keeps its
+// face ids. STL stores no shared vertices: its corners are welded by exact
+// position, numbered in order of first occurrence. OBJ is read with
+// tinyobjloader, PLY and STL with assimp, OFF by rtcd itself (assimp 5.2
+// crashes on malformed OFF and renumbers vertices). Throws MeshError (kind
+// file) naming the path and, where there is one, the line.
+struct MeshData {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<Mesh::Triangle> triangles;
+};
+MeshData read_mesh_file(const std::filesystem::path& path);
+
+// Maps every vertex to the first vertex at the bit-identical position (0 and
+// -0 are one position): the identity when no two vertices coincide.
+std::vector<uint32_t> coincident_representatives(std::span<const Eigen::Vector3f> positions);
+
+// Joins coincident vertices into their first occurrence; the survivors keep
+// their order and triangles are renumbered (MeshOptions::weld, STL files).
+void weld_coincident(std::vector<Eigen::Vector3f>& positions, std::vector<Mesh::Triangle>& triangles);
 
 // Writes a Wavefront OBJ that Mesh::load reads back to the same mesh.
 void save_obj(const Mesh& mesh, const std::filesystem::path& path);
