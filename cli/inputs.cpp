@@ -4,12 +4,14 @@
 #include <charconv>
 #include <cmath>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "rtcd/error.hpp"
+#include "rtcd/mesh_check.hpp"
 #include "rtcd/validation/families.hpp"
 
 namespace rtcd::cli {
@@ -63,13 +65,20 @@ void add_knobs(CLI::App& command, Knobs& k) {
   command.add_option("--distance-extension", k.distance_extension, "Predictive range and bounding-box growth");
 }
 
-std::shared_ptr<const Shape> parse_shape(const std::string& spec, double sampling, bool allow_zero_area) {
+void warn_if_self_intersecting(const Shape& shape, const std::string& name) {
+  if (const Mesh* mesh = shape.mesh())
+    if (const std::string warning = self_intersection_warning(*mesh, name); !warning.empty())
+      std::cerr << "rtcd: warning: " << warning << '\n';
+}
+
+std::shared_ptr<const Shape> parse_shape(const std::string& spec, double sampling, const MeshOptions& options) {
   if (spec.rfind("family:", 0) == 0) {
     const auto colon = spec.rfind(':');
     const std::string body = spec.substr(colon + 1);
     if (colon < 7 || (body != "a" && body != "b"))
       throw UsageError("'" + spec + "': expected family:NAME:a or family:NAME:b");
     const validation::Family f = validation::make_family(spec.substr(7, colon - 7));
+    warn_if_self_intersecting(body == "a" ? *f.a : *f.b, spec);
     return body == "a" ? f.a : f.b;
   }
   if (spec.rfind("sphere:", 0) == 0) {
@@ -82,9 +91,9 @@ std::shared_ptr<const Shape> parse_shape(const std::string& spec, double samplin
     if (v.size() != 3) throw UsageError("'" + spec + "': expected box:HX,HY,HZ");
     return std::make_shared<Shape>(Box{{v[0], v[1], v[2]}}, sampling);
   }
-  MeshOptions options;
-  options.allow_zero_area = allow_zero_area;
-  return std::make_shared<Shape>(Mesh::load(spec, options));
+  auto shape = std::make_shared<Shape>(Mesh::load(spec, options));
+  warn_if_self_intersecting(*shape, spec);
+  return shape;
 }
 
 Pose parse_pose(const std::string& text, const std::string& what) {

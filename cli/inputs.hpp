@@ -27,7 +27,11 @@ void add_knobs(CLI::App& command, Knobs& knobs);
 
 // "sphere:R", "box:HX,HY,HZ", a mesh file (.obj .off .ply .stl), or a body of a
 // validation family, "family:NAME:a" or "family:NAME:b" (to replay its cases).
-std::shared_ptr<const Shape> parse_shape(const std::string& spec, double sampling, bool allow_zero_area);
+// Warns on stderr, once, when a mesh crosses itself.
+std::shared_ptr<const Shape> parse_shape(const std::string& spec, double sampling, const MeshOptions& options);
+
+// Prints the warning of self_intersection_warning() for a shape's mesh.
+void warn_if_self_intersecting(const Shape& shape, const std::string& name);
 
 // "tx ty tz qw qx qy qz" (spaces or commas).
 Pose parse_pose(const std::string& text, const std::string& what);

@@ -75,6 +75,8 @@ int run_validate(const ValidateOptions& o) {
                 o.no_oracles ? "" : "  FCL agr FCL blind    e-e GIM agr   FCL us  FCLc us   GIM us   xFCL xFCLc  xGIM");
   for (const auto& family_name : families) {
     const validation::Family family = validation::make_family(family_name);
+    warn_if_self_intersecting(*family.a, "family:" + family_name + ":a");
+    warn_if_self_intersecting(*family.b, "family:" + family_name + ":b");
     for (const auto& backend : backends) {
       run.backend = backend;
       const validation::Summary s = validation::run_family(family, run).summary;

@@ -23,9 +23,6 @@ namespace {
   throw MeshError(kind, vertex, triangle, s.str());
 }
 
-// Twice the area below which a triangle counts as zero-area, relative to its
-// longest edge squared: below float resolution of its own vertices.
-constexpr double kZeroAreaRelative = 1e-7;
 
 }  // namespace
 
@@ -137,9 +134,8 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
     const Eigen::Vector3d b = positions_[triangles_[t][1]].cast<double>();
     const Eigen::Vector3d c = positions_[triangles_[t][2]].cast<double>();
     const Eigen::Vector3d n = (b - a).cross(c - a);
-    const double longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
     signed_volume6 += a.dot(b.cross(c));
-    if (n.norm() <= kZeroAreaRelative * longest2) {
+    if (topology::shape_ratio(a, b, c) <= topology::kZeroAreaRatio) {
       if (!options.allow_zero_area)
         fail(MeshErrorKind::zero_area_triangle, {}, t,
              "triangle " + std::to_string(t) +

@@ -1,5 +1,5 @@
-// Edges of a triangle list by vertex id: what mesh validation and the mesh
-// checker both read (boundary, manifold, orientation, neighbours).
+// Edges of a triangle list by vertex id, and the zero-area rule: what mesh
+// validation and the mesh checker both read.
 #pragma once
 
 #include <algorithm>
@@ -8,9 +8,22 @@
 #include <span>
 #include <vector>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
 namespace rtcd::topology {
 
 using Triangle = std::array<uint32_t, 3>;
+
+// Twice the area over the longest edge squared (the smallest altitude over
+// the longest edge): 0 for a degenerate triangle, sqrt(3)/2 when equilateral.
+inline double shape_ratio(const Eigen::Vector3d& a, const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+  const double longest2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+  return longest2 > 0 ? (b - a).cross(c - a).norm() / longest2 : 0.0;
+}
+// At or below this ratio a triangle has zero area: below the float
+// resolution of its own vertices.
+inline constexpr double kZeroAreaRatio = 1e-7;
 
 // Vertices of edge e in the numbering of Algorithm 2 (see mesh.hpp):
 // 0 = (v2, v0), 1 = (v0, v1), 2 = (v1, v2).

@@ -1,11 +1,16 @@
-// Loading OBJ, OFF, PLY and STL through assimp, and file errors.
+// Loading OBJ, OFF, PLY and STL with the file's ids, and file errors.
 #include <filesystem>
 #include <fstream>
+
+#include <algorithm>
+#include <numeric>
+#include <random>
 
 #include <gtest/gtest.h>
 
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
+#include "rtcd/narrow_phase.hpp"
 
 namespace {
 
@@ -79,6 +84,128 @@ TEST_F(MeshFiles, ObjRoundTripIsExact) {
 TEST_F(MeshFiles, Off) { expect_box(rtcd::Mesh::load(write("box.off", off_text(box_)))); }
 TEST_F(MeshFiles, Ply) { expect_box(rtcd::Mesh::load(write("box.ply", ply_text(box_)))); }
 TEST_F(MeshFiles, StlWeldsCorners) { expect_box(rtcd::Mesh::load(write("box.stl", stl_text(box_)))); }
+
+// A mesh as a file would list it: positions and faces in the file's order.
+struct Listing {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<rtcd::Mesh::Triangle> faces;
+};
+
+// The blob with its vertex list and its face list shuffled.
+Listing shuffled_blob() {
+  const rtcd::Mesh blob = rtcd::gen::concave_blob(902, 3, 1.0);
+  std::mt19937 rng(11);
+  std::vector<uint32_t> new_id(blob.vertex_count()), face_order(blob.triangle_count());
+  std::iota(new_id.begin(), new_id.end(), 0u);
+  std::iota(face_order.begin(), face_order.end(), 0u);
+  std::shuffle(new_id.begin(), new_id.end(), rng);
+  std::shuffle(face_order.begin(), face_order.end(), rng);
+  Listing l;
+  l.positions.resize(blob.vertex_count());
+  for (uint32_t v = 0; v < blob.vertex_count(); ++v) l.positions[new_id[v]] = blob.positions()[v];
+  for (uint32_t f : face_order) {
+    const auto& t = blob.triangles()[f];
+    l.faces.push_back({new_id[t[0]], new_id[t[1]], new_id[t[2]]});
+  }
+  return l;
+}
+
+std::string as_off(const Listing& l) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "OFF\n" << l.positions.size() << ' ' << l.faces.size() << " 0\n";
+  for (const auto& p : l.positions) s << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const auto& t : l.faces) s << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  return s.str();
+}
+std::string as_obj(const Listing& l) {
+  std::ostringstream s;
+  s.precision(9);
+  for (const auto& p : l.positions) s << "v " << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const auto& t : l.faces) s << "f " << t[0] + 1 << ' ' << t[1] + 1 << ' ' << t[2] + 1 << '\n';
+  return s.str();
+}
+std::string as_ply(const Listing& l) {
+  std::ostringstream s;
+  s.precision(9);
+  s << "ply\nformat ascii 1.0\nelement vertex " << l.positions.size()
+    << "\nproperty float x\nproperty float y\nproperty float z\nelement face " << l.faces.size()
+    << "\nproperty list uchar int vertex_indices\nend_header\n";
+  for (const auto& p : l.positions) s << p.x() << ' ' << p.y() << ' ' << p.z() << '\n';
+  for (const auto& t : l.faces) s << "3 " << t[0] << ' ' << t[1] << ' ' << t[2] << '\n';
+  return s.str();
+}
+
+// Every id a step reports is the file's: a contact's vertex is the file's
+// vertex at its origin, its triangle (when the file's body is the target)
+// the file's face whose normal it reports.
+TEST_F(MeshFiles, ContactIdsAreTheFilesOnShuffledFiles) {
+  const Listing l = shuffled_blob();
+  for (const auto& [name, text] : {std::pair{"blob.off", as_off(l)}, std::pair{"blob.obj", as_obj(l)},
+                                   std::pair{"blob.ply", as_ply(l)}}) {
+    SCOPED_TRACE(name);
+    const rtcd::Mesh m = rtcd::Mesh::load(write(name, text));
+    ASSERT_EQ(m.vertex_count(), l.positions.size());
+    ASSERT_EQ(m.triangle_count(), l.faces.size());
+    for (size_t v = 0; v < l.positions.size(); ++v) ASSERT_EQ(m.positions()[v], l.positions[v]) << v;
+    for (size_t f = 0; f < l.faces.size(); ++f) ASSERT_EQ(m.triangles()[f], l.faces[f]) << f;
+
+    auto narrow = rtcd::make_narrow_phase("basic");
+    const auto file_shape = narrow->add_shape(std::make_shared<rtcd::Shape>(m));
+    const auto other = narrow->add_shape(std::make_shared<rtcd::Shape>(rtcd::gen::concave_blob(902, 4, 0.8)));
+    const rtcd::BodyId a = narrow->add_body(file_shape, {});
+    rtcd::Pose pose_b;
+    pose_b.position = {1.1, 0.2, 0.1};
+    const rtcd::BodyId b = narrow->add_body(other, pose_b);
+    const rtcd::BodyPair pair{a, b};
+    const rtcd::StepResult r = narrow->detect(std::span(&pair, 1));
+    size_t from_file = 0, into_file = 0;
+    for (const auto& c : r.contacts) {
+      if (c.source_body == a) {
+        ++from_file;
+        EXPECT_EQ(c.origin.cast<float>(), l.positions[c.vertex]);
+      } else {
+        ++into_file;
+        const auto& t = l.faces[size_t(c.triangle)];
+        const Eigen::Vector3d n = (l.positions[t[1]] - l.positions[t[0]])
+                                      .cross(l.positions[t[2]] - l.positions[t[0]])
+                                      .cast<double>()
+                                      .normalized();
+        EXPECT_NEAR(c.normal.dot(n), 1.0, 1e-5);
+      }
+    }
+    EXPECT_GT(from_file, 5u);
+    EXPECT_GT(into_file, 5u);
+  }
+}
+
+TEST_F(MeshFiles, PolygonsAreFannedFromTheirFirstCorner) {
+  // A cube of six quads: face k becomes triangles 2k and 2k + 1.
+  const std::string text =
+      "OFF\n8 6 0\n0 0 0\n1 0 0\n0 1 0\n1 1 0\n0 0 1\n1 0 1\n0 1 1\n1 1 1\n"
+      "4 0 2 3 1\n4 4 5 7 6\n4 0 1 5 4\n4 2 6 7 3\n4 0 4 6 2\n4 1 3 7 5\n";
+  const rtcd::Mesh m = rtcd::Mesh::load(write("quads.off", text));
+  ASSERT_EQ(m.triangle_count(), 12u);
+  EXPECT_EQ(m.triangles()[2], (rtcd::Mesh::Triangle{4, 5, 7}));
+  EXPECT_EQ(m.triangles()[3], (rtcd::Mesh::Triangle{4, 7, 6}));
+  EXPECT_FALSE(m.report().open());
+}
+
+TEST_F(MeshFiles, CoincidentVerticesStayDistinctUnlessWelded) {
+  // Two tetrahedra touching at the origin, each with a vertex of its own
+  // there: two rays along opposite normals. Welded, the fans' normals cancel.
+  const fs::path pinch = fs::path(RTCD_DATA_DIR) / "defects" / "pinch_split.off";
+  const rtcd::Mesh m = rtcd::Mesh::load(pinch);
+  ASSERT_EQ(m.vertex_count(), 8u);
+  EXPECT_EQ(m.positions()[0], m.positions()[4]);
+  EXPECT_NEAR(m.vertex_normals()[0].dot(-Eigen::Vector3f::Ones().normalized()), 1.0f, 1e-6f);
+  EXPECT_NEAR(m.vertex_normals()[4].dot(Eigen::Vector3f::Ones().normalized()), 1.0f, 1e-6f);
+  rtcd::MeshOptions weld;
+  weld.weld = true;
+  const rtcd::Mesh welded = rtcd::Mesh::load(pinch, weld);
+  EXPECT_EQ(welded.vertex_count(), 7u);
+  EXPECT_LT(welded.vertex_normals()[0].norm(), 1e-6f);
+}
 
 void expect_file_error(const fs::path& path, const std::string& fragment) {
   try {

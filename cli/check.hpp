@@ -1,0 +1,18 @@
+// `rtcd check MESH...`: what each mesh file holds and which of its defects
+// change inside/outside answers. Exit 0 fit, 1 a defect, 2 unreadable.
+#pragma once
+
+#include <string>
+#include <vector>
+
+namespace rtcd::cli {
+
+struct CheckOptions {
+  std::vector<std::string> files;
+  bool json = false;
+  bool weld = false;
+};
+
+int run_check(const CheckOptions& options);
+
+}  // namespace rtcd::cli
