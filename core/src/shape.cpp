@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <numbers>
+#include <sstream>
 
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
@@ -13,6 +14,17 @@ namespace {
 void check_density(double density) {
   if (!std::isfinite(density) || density < 0 || density > 1e7)
     throw UsageError("sampling density " + std::to_string(density) + " is outside [0, 1e7] origins per unit area");
+}
+
+// Volumes obey the meshes' size range (mesh.hpp): the same single-precision
+// tests run on them.
+void check_size(double extent, double diagonal, const std::string& what) {
+  if (extent > kMaxCoordinate || diagonal < kMinBodySize) {
+    std::ostringstream s;
+    s << what << " is outside the supported sizes (coordinates up to " << kMaxCoordinate << ", a diagonal of at least "
+      << kMinBodySize << ")";
+    throw UsageError(s.str());
+  }
 }
 
 void add_source(RaySources& s, const Eigen::Vector3d& origin, const Eigen::Vector3d& inward) {
@@ -34,6 +46,7 @@ Shape::Shape(Mesh mesh) : geometry_(std::move(mesh)) {
 Shape::Shape(Sphere sphere, double density) : geometry_(sphere) {
   if (!std::isfinite(sphere.radius) || sphere.radius <= 0)
     throw UsageError("sphere radius " + std::to_string(sphere.radius) + " must be finite and > 0");
+  check_size(sphere.radius, 2 * sphere.radius, "sphere radius");
   check_density(density);
   const double r = sphere.radius;
   const Mesh ico = gen::icosphere(1.0, 2);
@@ -53,6 +66,7 @@ Shape::Shape(Sphere sphere, double density) : geometry_(sphere) {
 Shape::Shape(Box box, double density) : geometry_(box) {
   const Eigen::Vector3d h = box.half_extents;
   if (!h.allFinite() || (h.array() <= 0).any()) throw UsageError("box half extents must be finite and > 0");
+  check_size(h.maxCoeff(), 2 * h.norm(), "box half extents");
   check_density(density);
   for (int i = 0; i < 8; ++i) {
     const Eigen::Vector3d sign(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);

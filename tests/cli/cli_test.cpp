@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <set>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -127,6 +128,78 @@ TEST_F(CliFiles, EveryBadInputExitsWith2AndOneClearLine) {
     EXPECT_NE(r.out.find(fragment), std::string::npos) << args << "\n" << r.out;
     EXPECT_EQ(std::count(r.out.begin(), r.out.end(), '\n'), 1) << args << "\n" << r.out;
   }
+}
+
+}  // namespace
+
+namespace {
+
+const std::string defects = std::string(RTCD_DATA_DIR) + "/defects/";
+
+TEST(CliCheck, ExitCodesFitDefectUnreadable) {
+  const Outcome fit = run("check " + data + "blob_902.obj");
+  EXPECT_EQ(fit.code, 0) << fit.out;
+  EXPECT_NE(fit.out.find("fit for the method"), std::string::npos) << fit.out;
+  const Outcome crossing = run("check " + defects + "two_cubes_overlapping.off");
+  EXPECT_EQ(crossing.code, 1) << crossing.out;
+  EXPECT_NE(crossing.out.find("self_intersections: 6 triangle pairs"), std::string::npos) << crossing.out;
+  const Outcome missing = run("check " + data + "blob_902.obj " + defects + "nope.off");
+  EXPECT_EQ(missing.code, 2) << missing.out;
+  EXPECT_NE(missing.out.find("nope.off: no such file"), std::string::npos) << missing.out;
+}
+
+TEST(CliCheck, JsonListsEveryFindingPerFile) {
+  const Outcome r = run("check --json " + defects + "flipped_triangle.off " + defects + "pinch_split.off");
+  ASSERT_EQ(r.code, 1) << r.out;
+  const auto j = nlohmann::json::parse(r.out);
+  ASSERT_EQ(j.size(), 2u);
+  EXPECT_FALSE(j[0]["fit"].get<bool>());
+  EXPECT_EQ(j[0]["findings"]["inconsistent_orientation"]["count"], 3);
+  EXPECT_TRUE(j[0]["findings"]["inconsistent_orientation"]["defect"].get<bool>());
+  EXPECT_TRUE(j[1]["fit"].get<bool>());
+  EXPECT_EQ(j[1]["findings"]["coincident_vertices"]["examples"][0], nlohmann::json({0, 4}));
+  // Welded, the two vertices at the pinch become one vertex joining two fans.
+  const Outcome welded = run("check --json --weld " + defects + "pinch_split.off");
+  ASSERT_EQ(welded.code, 0) << welded.out;
+  const auto w = nlohmann::json::parse(welded.out);
+  EXPECT_EQ(w[0]["vertices"], 7);
+  EXPECT_EQ(w[0]["findings"]["pinch_vertices"]["count"], 1);
+}
+
+TEST(CliQuery, WarnsOnceWhenABodyCrossesItself) {
+  const Outcome r = run("query " + defects + "two_cubes_overlapping.off box:0.1,0.1,0.1");
+  ASSERT_EQ(r.code, 0) << r.out;
+  const size_t first = r.out.find("crosses itself");
+  ASSERT_NE(first, std::string::npos) << r.out;
+  EXPECT_EQ(r.out.find("crosses itself", first + 1), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("2x17"), std::string::npos) << r.out;
+}
+
+TEST(CliQuery, WeldIsExplicit) {
+  // A box at the pinch of two tetrahedra: each has its own vertex there, each
+  // casts a ray; welded, their normals cancel and neither casts.
+  auto vertices_of_a = [](const Outcome& r) {
+    std::set<int> v;
+    const auto j = nlohmann::json::parse(r.out);
+    for (const auto& c : j["contacts"])
+      if (c["source"] == "a") v.insert(c["vertex"].get<int>());
+    return v;
+  };
+  const Outcome split = run("query " + defects + "pinch_split.off box:0.1,0.1,0.1 --json");
+  ASSERT_EQ(split.code, 0) << split.out;
+  EXPECT_EQ(vertices_of_a(split), (std::set<int>{0, 4}));
+  const Outcome welded = run("query " + defects + "pinch_split.off box:0.1,0.1,0.1 --weld --json");
+  ASSERT_EQ(welded.code, 0) << welded.out;
+  EXPECT_TRUE(vertices_of_a(welded).empty());
+}
+
+TEST(CliQuery, SizesOutsideTheSupportedRangeAreRefused) {
+  const Outcome mesh = run("query " + defects + "huge_cube.off box:0.5,0.5,0.5");
+  EXPECT_EQ(mesh.code, 2) << mesh.out;
+  EXPECT_NE(mesh.out.find("supported coordinate range"), std::string::npos) << mesh.out;
+  const Outcome box = run("query box:0.5,0.5,0.5 box:1e13,1e13,1e13");
+  EXPECT_EQ(box.code, 2) << box.out;
+  EXPECT_NE(box.out.find("outside the supported sizes"), std::string::npos) << box.out;
 }
 
 }  // namespace

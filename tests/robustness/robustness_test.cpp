@@ -215,6 +215,81 @@ TEST_P(Robustness, TinyHugeAndFarBodies) {
   expect_exact(GetParam(), far, 200);
 }
 
+// The supported sizes (mesh.hpp, docs/ARCHITECTURE.md "Sizes"), at both
+// edges. Coordinates up to 1e12: a unit box wholly inside a cube whose
+// corners sit at 1e12 gets its 8 contacts with exact depths, and a pair
+// drawn around bodies reaching 0.95e12 is judged exact; beyond 1e12 a mesh is
+// refused. Bodies as small as 1e-9 are judged exact too.
+TEST_P(Robustness, SupportedCoordinateRangeEdges) {
+  PairRig rig(GetParam(), shape(gen::box({0.5, 0.5, 0.5})), shape(gen::box({1e12, 1e12, 1e12})));
+  const StepResult r = rig.step(Pose{}, Pose{});
+  size_t corners = 0;
+  for (const Contact& c : r.contacts) {
+    if (c.source != Side::a) continue;
+    ++corners;
+    EXPECT_NEAR(c.depth / ((1e12 - 0.5) * std::sqrt(3.0)), 1.0, 1e-6);
+  }
+  EXPECT_EQ(corners, 8u);
+  try {
+    gen::box({2e12, 2e12, 2e12});
+    ADD_FAILURE() << "a mesh beyond the supported coordinates was accepted";
+  } catch (const MeshError& e) {
+    EXPECT_EQ(e.kind(), MeshErrorKind::out_of_range);
+    EXPECT_NE(std::string(e.what()).find("supported coordinate range"), std::string::npos) << e.what();
+  }
+  for (double s : {1e-9, 0.7e12}) {  // blob diagonal 2.1e-9; torus reaching 0.95e12
+    SCOPED_TRACE(s);
+    Family f = family("edge", scaled(gen::concave_blob(902, 8, 0.6), s), scaled(gen::torus(1, 0.35, 48, 24), s),
+                      1.8 * s);
+    expect_exact(GetParam(), f, 100);
+  }
+}
+
+// Two bodies 1e4 apart in size (kMaxSizeRatio): the small one straddles the
+// large one's surface. Every origin farther than 1e-6 of the large body's
+// radius (1% of the small one's) from the surface is judged right.
+TEST_P(Robustness, SupportedSizeRatioEdge) {
+  auto small = shape(gen::concave_blob(902, 21, 0.6));
+  auto large = shape(scaled(gen::concave_blob(902, 22, 1.0), 6000.0));
+  ASSERT_NEAR(large->radius() / small->radius(), kMaxSizeRatio, 0.2 * kMaxSizeRatio);
+  const oracle::ExactShape exact_large(large), exact_small(small);
+  const double margin = 1e-6 * large->radius();
+  PairRig rig(GetParam(), small, large);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const Mesh& surface = *large->mesh();
+  size_t judged = 0, inside = 0;
+  for (int i = 0; i < 40; ++i) {
+    // Around the centre of a random triangle of the large body, within the small one's radius.
+    const auto& t = surface.triangles()[size_t(rng() % surface.triangle_count())];
+    const Vector3d centre = (surface.positions()[t[0]] + surface.positions()[t[1]] + surface.positions()[t[2]])
+                                .cast<double>() / 3;
+    const Vector3d normal = surface.triangle_normals()[size_t(&t - surface.triangles().data())].cast<double>();
+    const Pose a = at(centre + 0.6 * u(rng) * normal + 0.2 * Vector3d(u(rng), u(rng), u(rng)),
+                      Eigen::Quaterniond(u(rng), u(rng), u(rng), u(rng)).normalized());
+    const StepResult r = rig.step(a, Pose{});
+    std::set<uint32_t> from_small, from_large;
+    for (const Contact& c : r.contacts) (c.source == Side::a ? from_small : from_large).insert(c.vertex);
+    const auto truth_small = exact_large.rays_from(*small, a, Pose{}, margin);
+    for (uint32_t v = 0; v < truth_small.size(); ++v) {
+      if (truth_small[v].deep()) {
+        ++inside;
+        EXPECT_TRUE(from_small.count(v)) << "missed vertex " << v << " pose " << i;
+      }
+      if (truth_small[v].far_outside()) {
+        EXPECT_FALSE(from_small.count(v)) << "false vertex " << v << " pose " << i;
+      }
+      judged += truth_small[v].deep() || truth_small[v].far_outside();
+    }
+    const auto truth_large = exact_small.rays_from(*large, Pose{}, a, 1e-6 * small->radius());
+    for (uint32_t v : from_large) {
+      EXPECT_FALSE(truth_large[v].far_outside()) << "false vertex " << v << " of B";
+    }
+  }
+  EXPECT_GT(inside, 1000u);  // not vacuous: many origins are inside
+  EXPECT_GT(judged, 0.9 * 40 * small->sources().origins.size());
+}
+
 TEST_P(Robustness, HighResolutionTarget) {
   Mesh big = gen::concave_blob(100'000, 10, 1.0);
   ASSERT_GE(big.triangle_count(), 100'000u);
