@@ -248,6 +248,10 @@ def mesh_file_seeds():
     zero = "".join(f"v {' '.join(map(fmt, p))}\n" for p in TETRA_P + [(0.5, 0, 0)]) + \
         "".join(f"f {' '.join(str(i + 1) for i in t)}\n" for t in [(0, 2, 4), (4, 2, 1), (0, 4, 1)] + TETRA_T[1:])
     s["zero_area.obj"] = (4 | EXT[".obj"], zero)
+    # The checker's defect classes (data/defects/), one of them welded (bit 3).
+    for path in sorted((HERE.parent / "data" / "defects").glob("*.off")):
+        s["defect_" + path.name] = (EXT[".off"], path.read_bytes())
+    s["defect_pinch_split_welded.off"] = (8 | EXT[".off"], (HERE.parent / "data/defects/pinch_split.off").read_bytes())
     out = {}
     for name, (selector, body) in s.items():
         out[name] = bytes([selector]) + (body if isinstance(body, bytes) else body.encode())

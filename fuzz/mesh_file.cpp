@@ -1,8 +1,9 @@
-// libFuzzer harness: mesh files through rtcd::Mesh::load (assimp, then our
-// validation). The first byte picks the extension (.obj .off .ply .stl) and
-// MeshOptions::allow_zero_area; the rest is the file. MeshError is the one
-// accepted failure; a loaded mesh must hold together (indices, adjacency,
-// unit normals).
+// libFuzzer harness: mesh files through rtcd::read_mesh_file, the mesh
+// checker (rtcd check) and validation. The first byte picks the extension
+// (.obj .off .ply .stl), MeshOptions::allow_zero_area and ::weld; the rest is
+// the file. MeshError is the one accepted failure; the checker never throws
+// and agrees with validation; a loaded mesh must hold together (indices,
+// adjacency, unit normals).
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -16,10 +17,32 @@
 #include "invariants.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh.hpp"
+#include "rtcd/mesh_check.hpp"
 
 namespace {
 
 using rtcd::fuzz::require;
+
+// The checker's report holds together, and a mesh it finds fit (zero-area
+// triangles aside, which validation takes only when allowed) validates.
+void check_report(const rtcd::MeshData& d, const rtcd::MeshCheck& c, const rtcd::MeshOptions& options) {
+  require(c.vertices == d.positions.size() && c.triangles == d.triangles.size(), "checker miscounted");
+  for (const auto& f : c.findings) {
+    require(f.examples.size() <= f.count && f.examples.size() <= rtcd::MeshCheck::kMaxExamples, "bad examples");
+    const size_t limit = f.element == "triangle" || f.element == "triangle pair" ? d.triangles.size()
+                                                                                  : d.positions.size();
+    for (const auto& e : f.examples)
+      for (uint32_t id : e) require(f.element == "mesh" || id < limit, "example id out of range");
+  }
+  const bool zero_area_ok = options.allow_zero_area || c.finding("zero_area_triangles").count == 0;
+  if (c.fit() && zero_area_ok) {
+    try {
+      rtcd::Mesh(d.positions, d.triangles, options);
+    } catch (const rtcd::MeshError& e) {
+      require(false, (std::string("checker found the mesh fit, validation refused it: ") + e.what()).c_str());
+    }
+  }
+}
 
 void check_mesh(const rtcd::Mesh& m) {
   require(m.vertex_count() > 0 && m.triangle_count() > 0, "loaded an empty mesh");
@@ -62,9 +85,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   }
   rtcd::MeshOptions options;
   options.allow_zero_area = (selector >> 2) & 1;
+  const bool weld = (selector >> 3) & 1;
   static const bool verbose = std::getenv("RTCD_FUZZ_VERBOSE") != nullptr;
   try {
-    const rtcd::Mesh mesh = rtcd::Mesh::load(path, options);
+    rtcd::MeshData data = rtcd::read_mesh_file(path);
+    if (weld) rtcd::weld_coincident(data.positions, data.triangles);
+    check_report(data, rtcd::check_mesh(data.positions, data.triangles), options);
+    const rtcd::Mesh mesh(std::move(data.positions), std::move(data.triangles), options);
     check_mesh(mesh);
     if (verbose) std::fprintf(stderr, "loaded %zu vertices, %zu triangles\n", mesh.vertex_count(), mesh.triangle_count());
   } catch (const rtcd::MeshError& e) {

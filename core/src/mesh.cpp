@@ -151,14 +151,14 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
   // Edge adjacency: an edge is shared by at most two triangles, which run it
   // in opposite directions. Of several faults, the lowest triangle is named.
   neighbors_.assign(nt, {no_neighbor, no_neighbor, no_neighbor});
-  const topology::HalfEdge* fault = nullptr;
+  std::optional<topology::HalfEdge> fault;
   bool fault_non_manifold = false;
   topology::for_each_edge(topology::half_edges(triangles_), [&](std::span<const topology::HalfEdge> uses) {
     const topology::HalfEdge* culprit = nullptr;
     if (uses.size() > 2) culprit = &uses[2];
     else if (uses.size() == 2 && uses[0].from == uses[1].from) culprit = &uses[1];
-    if (culprit != nullptr && (fault == nullptr || culprit->triangle < fault->triangle)) {
-      fault = culprit;
+    if (culprit != nullptr && (!fault || culprit->triangle < fault->triangle)) {
+      fault = *culprit;
       fault_non_manifold = uses.size() > 2;
     }
     if (uses.size() == 1) ++report_.boundary_edges;
@@ -167,7 +167,7 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
       neighbors_[uses[1].triangle][uses[1].edge] = int32_t(uses[0].triangle);
     }
   });
-  if (fault != nullptr) {
+  if (fault) {
     const std::string edge = "edge (" + std::to_string(fault->from) + ", " + std::to_string(fault->to) + ")";
     if (fault_non_manifold)
       fail(MeshErrorKind::non_manifold_edge, fault->from, fault->triangle,
