@@ -139,6 +139,8 @@ std::shared_ptr<const Shape> read_shape(Reader& r) {
     return std::make_shared<Shape>(std::move(*m));
   } catch (const MeshError&) {
     return nullptr;  // invalid meshes are rejected by design
+  } catch (const UsageError&) {
+    return nullptr;  // so are volumes outside the supported sizes
   }
 }
 
