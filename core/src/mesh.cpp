@@ -3,10 +3,10 @@
 #include "rtcd/mesh.hpp"
 
 #include <cmath>
+#include <cstring>
 #include <numbers>
 #include <sstream>
 #include <unordered_map>
-#include <cstring>
 
 #include <Eigen/Geometry>
 
@@ -22,7 +22,6 @@ namespace {
   s << "invalid mesh: " << what;
   throw MeshError(kind, vertex, triangle, s.str());
 }
-
 
 }  // namespace
 

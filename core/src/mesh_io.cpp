@@ -3,10 +3,9 @@
 #include <algorithm>
 #include <charconv>
 #include <cstdio>
-#include <cstring>
+#include <cstdlib>
 #include <fstream>
 #include <sstream>
-#include <unordered_map>
 
 #include <assimp/Importer.hpp>
 #include <assimp/scene.h>
