@@ -32,7 +32,7 @@ inline void require(bool ok, const std::string& what) {
   if (!ok) violated(what);
 }
 
-// Number of faces a ray can report against `target`: triangles, box faces, 1 for a sphere.
+// Number of faces a ray can report against `target`: triangles, box faces, 1 for a sphere or a half-space.
 inline size_t face_count(const Shape& target) {
   if (const Mesh* m = target.mesh()) return m->triangle_count();
   return std::holds_alternative<Box>(target.geometry()) ? 6 : 1;

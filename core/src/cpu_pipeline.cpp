@@ -50,7 +50,8 @@ struct Outcome {
 // Distance along the ray to where it leaves the target through the face the
 // kernel chose, in double precision: depths then agree across backends (and
 // with the exact reference) to far better than float. Mesh: the triangle's
-// plane; box: the face's plane; sphere: the far root (where the line leaves).
+// plane; box: the face's plane; sphere: the far root (where the line leaves);
+// half-space: its plane.
 double refined_distance(const Shape& target, int32_t face, const Eigen::Vector3d& origin,
                         const Eigen::Vector3d& direction) {
   if (const Mesh* mesh = target.mesh()) {
@@ -65,6 +66,7 @@ double refined_distance(const Shape& target, int32_t face, const Eigen::Vector3d
     const double c = origin.squaredNorm() - sphere->radius * sphere->radius;
     return (-b + std::sqrt(std::max(b * b - a * c, 0.0))) / a;
   }
+  if (std::holds_alternative<HalfSpace>(target.geometry())) return -origin.z() / direction.z();
   const int axis = face / 2;
   const double plane = (face % 2 == 0 ? 1.0 : -1.0) * std::get<Box>(target.geometry()).half_extents[axis];
   return (plane - origin[axis]) / direction[axis];
@@ -341,11 +343,12 @@ Outcome CpuNarrowPhase::trace_one(const Shape& target, const MeshTracer* tracer,
       }
     }
   } else {
+    const auto& shape = target.geometry();
     const rtcd_volume_hit h =
-        std::holds_alternative<Sphere>(target.geometry())
-            ? rtcd_sphere_line(origin, direction, float(std::get<Sphere>(target.geometry()).radius))
-            : rtcd_box_line(origin, direction,
-                            to_kernel(std::get<Box>(target.geometry()).half_extents.cast<float>()));
+        std::holds_alternative<Sphere>(shape) ? rtcd_sphere_line(origin, direction, float(std::get<Sphere>(shape).radius))
+        : std::holds_alternative<Box>(shape)
+            ? rtcd_box_line(origin, direction, to_kernel(std::get<Box>(shape).half_extents.cast<float>()))
+            : rtcd_halfspace_line(origin, direction);
     ++(iterative ? stats.rays_iterative : stats.rays_full);
     if (iterative) ++stats.endings[h.status];
     status = h.status;
@@ -369,6 +372,8 @@ void CpuNarrowPhase::gather(const Job& job, StepResult& out, bool is_a) const {
       local_normal = m->triangle_normals()[o.triangle].cast<double>();
     } else if (std::holds_alternative<Sphere>(target.geometry())) {
       local_normal = (o.origin + o.t * o.direction).normalized();
+    } else if (std::holds_alternative<HalfSpace>(target.geometry())) {
+      local_normal = Eigen::Vector3d::UnitZ();
     } else {
       local_normal = Eigen::Vector3d::Zero();
       local_normal[o.triangle / 2] = o.triangle % 2 == 0 ? 1.0 : -1.0;

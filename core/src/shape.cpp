@@ -92,4 +92,10 @@ Shape::Shape(Box box, double density) : geometry_(box) {
   radius_ = h.norm();
 }
 
+Shape::Shape(HalfSpace half_space) : geometry_(half_space) {
+  bounds_ = {Eigen::Vector3d(-kMaxCoordinate, -kMaxCoordinate, -kMaxCoordinate),
+             Eigen::Vector3d(kMaxCoordinate, kMaxCoordinate, 0.0)};
+  radius_ = 0.0;
+}
+
 }  // namespace rtcd

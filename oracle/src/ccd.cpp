@@ -11,6 +11,7 @@
 
 #include <Eigen/Geometry>
 
+#include "rtcd/error.hpp"
 #include "rtcd/oracle/third_party.hpp"
 
 namespace rtcd::oracle {
@@ -107,6 +108,8 @@ void first_dir(const void* a, const void*, ccd_vec3_t* dir) {
 // The returned depth is always the support of A - B along the direction, or
 // EPA's own value where the two agree: moving B by it separates the pair.
 ConvexPenetration ccd_penetration(const Shape& a, const Pose& pose_a, const Shape& b, const Pose& pose_b) {
+  if (std::holds_alternative<HalfSpace>(a.geometry()) || std::holds_alternative<HalfSpace>(b.geometry()))
+    throw UsageError("libccd needs bounded shapes: a half-space has no support point");
   Placed placed_a = place(a, pose_a);
   const Placed placed_b = place(b, pose_b);
   // EPA on a polytope pair is exact up to rounding; on a sphere it stops

@@ -222,6 +222,7 @@ bool ExactShape::inside(const Vec& p) const {
     return tree_->leaves_first(p, kDirections[2]);
   }
   if (const auto* s = std::get_if<Sphere>(&shape_->geometry())) return p.norm() < s->radius;
+  if (std::holds_alternative<HalfSpace>(shape_->geometry())) return p.z() < 0.0;
   const Vec& h = std::get<Box>(shape_->geometry()).half_extents;
   return (p.cwiseAbs().array() < h.array()).all();
 }
@@ -229,6 +230,7 @@ bool ExactShape::inside(const Vec& p) const {
 double ExactShape::distance(const Vec& p) const {
   if (tree_) return std::sqrt(tree_->squared_distance(p, kInf));
   if (const auto* s = std::get_if<Sphere>(&shape_->geometry())) return std::abs(p.norm() - s->radius);
+  if (std::holds_alternative<HalfSpace>(shape_->geometry())) return std::abs(p.z());
   const Vec& h = std::get<Box>(shape_->geometry()).half_extents;
   const Vec q = p.cwiseAbs() - h;
   if ((q.array() <= 0).all()) return -q.maxCoeff();
@@ -254,6 +256,13 @@ bool ExactShape::first_hit(const Vec& o, const Vec& d, double& t_hit, int32_t& t
         t_hit = t;
         triangle = 0;
       }
+    }
+  } else if (std::holds_alternative<HalfSpace>(shape_->geometry())) {
+    // The plane z = 0 is the only surface.
+    const double t = d.z() != 0.0 ? -o.z() / d.z() : -1.0;
+    if (t >= 0.0) {
+      t_hit = t;
+      triangle = 0;
     }
   } else {
     const Vec& h = std::get<Box>(shape_->geometry()).half_extents;

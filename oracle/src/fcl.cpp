@@ -40,6 +40,11 @@ std::shared_ptr<fcl::CollisionGeometryd> make_geometry(const Shape& shape) {
             b->computeLocalAABB();
             return b;
           },
+          [](const HalfSpace&) -> std::shared_ptr<fcl::CollisionGeometryd> {
+            auto h = std::make_shared<fcl::Halfspaced>(Eigen::Vector3d::UnitZ(), 0.0);
+            h->computeLocalAABB();
+            return h;
+          },
       },
       shape.geometry());
 }

@@ -116,6 +116,9 @@ GimpactShape::GimpactShape(const Shape& shape) : impl_(std::make_unique<Impl>())
                    b->setMargin(btScalar(1e-4 * h.minCoeff()));
                    impl.shape = std::move(b);
                  },
+                 [&](const HalfSpace&) {
+                   impl.shape = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), btScalar(0));
+                 },
              },
              shape.geometry());
 }

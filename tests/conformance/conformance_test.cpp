@@ -105,6 +105,57 @@ TEST_P(Conformance, BoxAgainstSphereVolume) {
   EXPECT_EQ(from_box, 4u);
 }
 
+// A cube sunk 0.1 into the ground: its four lower corners leave the
+// half-space upward through the plane (never through a far side, as from a
+// box ground), and the ground casts nothing.
+TEST_P(Conformance, CubeSunkIntoHalfSpace) {
+  auto r = rig(box_mesh(0.5), std::make_shared<Shape>(HalfSpace{}));
+  const StepResult res = r.step(at(3, -2, 0.4), at(0, 0, 0));
+  ASSERT_EQ(res.contacts.size(), 4u);
+  for (const Contact& c : res.contacts) {
+    EXPECT_EQ(c.source, Side::a);
+    EXPECT_EQ(c.triangle, 0);
+    EXPECT_NEAR(c.origin.z(), -0.1, 1e-7);
+    EXPECT_NEAR(c.depth, 0.1 * std::sqrt(3.0), 1e-6);
+    EXPECT_NEAR(c.projected_depth, 0.1, 1e-6);
+    EXPECT_NEAR((c.normal - Eigen::Vector3d::UnitZ()).norm(), 0.0, 1e-7);
+    EXPECT_NEAR((c.push - Eigen::Vector3d(0, 0, 0.1)).norm(), 0.0, 1e-6);
+  }
+  EXPECT_TRUE(res.pairs[0].colliding);
+}
+
+// A tilted ground: the plane through the ground's origin, normal along its
+// local +z; a sphere sunk by 0.2 along that normal has rays whose exit lies on
+// the plane, and a sphere above it within the extension is tracked, not hit.
+TEST_P(Conformance, SphereOnTiltedHalfSpace) {
+  const Eigen::Quaterniond tilt(Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()));
+  const Eigen::Vector3d n = tilt * Eigen::Vector3d::UnitZ();
+  auto r = rig(std::make_shared<Shape>(Sphere{1.0}), std::make_shared<Shape>(HalfSpace{}));
+  const StepResult sunk = r.step(at(Eigen::Vector3d(n * 0.8), Eigen::Quaterniond::Identity()), at(Eigen::Vector3d::Zero(), tilt));
+  ASSERT_FALSE(sunk.contacts.empty());
+  double deepest = 0;
+  for (const Contact& c : sunk.contacts) {
+    EXPECT_NEAR(n.dot(c.origin + c.depth * c.direction), 0.0, 1e-5);
+    EXPECT_NEAR((c.normal - n).norm(), 0.0, 1e-6);
+    deepest = std::max(deepest, c.projected_depth);
+  }
+  // No origin is exactly at the lowest point: the deepest is a little short.
+  EXPECT_LE(deepest, 0.2 + 1e-7);
+  EXPECT_GT(deepest, 0.19);
+  const StepResult above = r.step(at(Eigen::Vector3d(n * 1.05), Eigen::Quaterniond::Identity()), at(Eigen::Vector3d::Zero(), tilt));
+  EXPECT_TRUE(above.contacts.empty());
+  EXPECT_FALSE(above.predictive.empty());
+}
+
+// A body reaching below the ground by more than a box ground's thickness
+// still leaves through the plane: depth is the height below it.
+TEST_P(Conformance, DeepInHalfSpaceStillLeavesThroughThePlane) {
+  auto r = rig(box_mesh(0.5), std::make_shared<Shape>(HalfSpace{}));
+  const StepResult res = r.step(at(0, 0, -20), at(0, 0, 0));
+  ASSERT_EQ(res.contacts.size(), 4u);  // the top corners' inward rays point down: they never leave
+  for (const Contact& c : res.contacts) EXPECT_NEAR(c.projected_depth, 20.5, 1e-4);
+}
+
 // A small cube in the opening of a U: its vertices lie inside the bounding-box
 // overlap but outside the U's body, so nothing collides; moved into an arm,
 // all eight collide.

@@ -22,6 +22,14 @@ struct Box {
   Eigen::Vector3d half_extents = Eigen::Vector3d::Ones();
 };
 
+// The half-space z <= 0 of its local frame: a ground whose only exit is its
+// plane z = 0 (outward normal +z), so a ray from a body sunk into it leaves
+// upward by the depth below the plane, never through a far side face as it
+// would from a box. It casts no rays; its face id is 0. For the motion bound
+// of equation 2.1 it has no extent (radius 0): only the other body's radius
+// counts.
+struct HalfSpace {};
+
 // Ray origins in the shape's local frame, each with its inward unit direction.
 struct RaySources {
   std::vector<Eigen::Vector3f> origins;
@@ -30,7 +38,7 @@ struct RaySources {
 
 class Shape {
  public:
-  using Geometry = std::variant<Mesh, Sphere, Box>;
+  using Geometry = std::variant<Mesh, Sphere, Box, HalfSpace>;
 
   // A mesh casts from its vertices along the inward vertex normal.
   explicit Shape(Mesh mesh);
@@ -39,6 +47,8 @@ class Shape {
   // adds that many origins per unit area, spread evenly over the surface.
   explicit Shape(Sphere sphere, double sampling_density = 0.0);
   explicit Shape(Box box, double sampling_density = 0.0);
+  // Bounds: |x|, |y| <= kMaxCoordinate, -kMaxCoordinate <= z <= 0.
+  explicit Shape(HalfSpace half_space);
 
   const Geometry& geometry() const { return geometry_; }
   const Mesh* mesh() const { return std::get_if<Mesh>(&geometry_); }

@@ -8,7 +8,7 @@
 
 typedef struct {
   int status; /* rtcd_line_status: HIT, BEHIND, FRONT or MISS */
-  int face;   /* box: exit face 0..5 = +x,-x,+y,-y,+z,-z; sphere: 0 */
+  int face;   /* box: exit face 0..5 = +x,-x,+y,-y,+z,-z; sphere, half-space: 0 */
   float t;    /* exit distance (entry distance when FRONT) */
 } rtcd_volume_hit;
 
@@ -68,6 +68,19 @@ RTCD_INLINE rtcd_volume_hit rtcd_box_line(rtcd_vec3 origin, rtcd_vec3 direction,
   }
   if (t_in > t_out) return miss;
   return rtcd_classify_span(t_in, t_out, exit_face);
+}
+
+/* The half-space z <= 0: a line leaves it only upward, through z = 0; a
+ * line going down or level never leaves, and is a MISS even from inside. */
+RTCD_INLINE rtcd_volume_hit rtcd_halfspace_line(rtcd_vec3 origin, rtcd_vec3 direction) {
+  if (direction.z <= 0.0f) {
+    rtcd_volume_hit miss;
+    miss.status = RTCD_LINE_MISS;
+    miss.face = 0;
+    miss.t = 0.0f;
+    return miss;
+  }
+  return rtcd_classify_span(-3.0e38f, -origin.z / direction.z, 0);
 }
 
 #endif

@@ -65,7 +65,8 @@ class GimpactShape {
 };
 
 // libccd on convex shapes: a sphere, a box, or a mesh taken as the convex
-// hull of its vertices (the support function is the farthest vertex).
+// hull of its vertices (the support function is the farthest vertex). A
+// half-space has no support point: UsageError.
 struct ConvexPenetration {
   bool colliding = false;
   double depth = 0.0;                                   // penetration depth (EPA); 0 when separated
