@@ -9,6 +9,7 @@
 #include "check.hpp"
 #include "inputs.hpp"
 #include "report.hpp"
+#include "run.hpp"
 #include "validate.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
@@ -131,9 +132,24 @@ int main(int argc, char** argv) {
   validate->add_flag("--sweep", sweep, "Sweep the accuracy knobs; write CSV (see --csv)");
   validate->add_option("--csv", v.sweep_csv, "Where --sweep writes its CSV (default: standard output)");
 
+  rtcd::cli::RunOptions r;
+  uint64_t run_steps = 0;
+  auto* run = app.add_subcommand("run", "Simulate a scene on Bullet with rtcd's narrow phase (default: a small avalanche)");
+  run->add_option("SCENE", r.scene, "Scene file (data/scenes/*.json; schema in docs/scenes.md)");
+  run->add_option("--backend", r.backend, "Narrow-phase backend (overrides the scene's)");
+  run->add_option("--steps", run_steps, "Steps to run (overrides the scene's duration)")
+      ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
+  run->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
+  run->add_option("--out", r.out, "Output folder (default: runs/<scene>-<timestamp>/)");
+  run->add_flag("--no-plots", r.no_plots, "Skip the PNG plots");
+
   try {
     app.parse(argc, argv);
     if (*backends) return run_backends(backends_json);
+    if (*run) {
+      if (run_steps > 0) r.steps = run_steps;
+      return rtcd::cli::run_scene(r);
+    }
     if (*check) return rtcd::cli::run_check(c);
     if (*validate) {
       if (sweep && v.sweep_csv.empty()) v.sweep_csv = "-";

@@ -1,0 +1,259 @@
+// `rtcd run`: the main job. Steps a scene, streams steps.csv, then writes
+// summary.json, plots (Debian's python3-matplotlib) and snapshots.
+#include "run.hpp"
+
+#include <sys/resource.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+
+#include "rtcd/sim/simulation.hpp"
+
+namespace rtcd::cli {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+std::string timestamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y%m%d-%H%M%S", &tm);
+  return text;
+}
+
+std::string machine() {
+  std::ifstream cpu("/proc/cpuinfo");
+  std::string line;
+  while (std::getline(cpu, line))
+    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
+  return "unknown CPU";
+}
+
+double peak_rss_mib() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return double(u.ru_maxrss) / 1024.0;
+}
+
+constexpr const char* kCsvHeader =
+    "step,time,bodies,seconds_broad,seconds_narrow,seconds_solver,seconds_effects,seconds_total,pairs,pairs_full,"
+    "pairs_iterative,rays_full,rays_predictive,rays_iterative,contacts,predictive,solver_points,speculative_points,"
+    "kinetic_energy,interpenetration,deepest";
+
+void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
+  out << r.step << ',' << r.time << ',' << r.bodies << ',' << r.seconds_broad << ',' << r.seconds_narrow << ','
+      << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total << ',' << r.pairs << ',' << r.pairs_full
+      << ',' << r.pairs_iterative << ',' << r.rays_full << ',' << r.rays_predictive << ',' << r.rays_iterative << ','
+      << r.contacts << ',' << r.predictive << ',' << r.solver_points << ',' << r.speculative_points << ','
+      << r.kinetic_energy << ',';
+  if (r.interpenetration >= 0) out << r.interpenetration << ',' << r.deepest;
+  else out << ',';
+  out << '\n';
+}
+
+// A bar with rate and time left on a terminal; a plain line every 10% otherwise.
+class Progress {
+ public:
+  Progress(uint64_t total) : total_(total), tty_(isatty(STDOUT_FILENO)), start_(Clock::now()) {}
+  void update(uint64_t done) {
+    const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
+    const double rate = elapsed > 0 ? done / elapsed : 0;
+    const double left = rate > 0 ? (total_ - done) / rate : 0;
+    if (tty_) {
+      const int width = 30, filled = int(width * done / total_);
+      std::printf("\r[%s%s] %3d%%  %llu/%llu steps  %.1f steps/s  %.0f s left ", std::string(filled, '#').c_str(),
+                  std::string(width - filled, ' ').c_str(), int(100 * done / total_), (unsigned long long)done,
+                  (unsigned long long)total_, rate, left);
+      if (done == total_) std::printf("\n");
+      std::fflush(stdout);
+    } else if (done == total_ || 10 * done / total_ != 10 * (done - 1) / total_) {
+      std::printf("step %llu/%llu  %.1f steps/s  %.0f s left\n", (unsigned long long)done, (unsigned long long)total_,
+                  rate, left);
+      std::fflush(stdout);
+    }
+  }
+
+ private:
+  uint64_t total_;
+  bool tty_;
+  Clock::time_point start_;
+};
+
+}  // namespace
+
+int run_scene(const RunOptions& o) {
+  sim::Scene scene = sim::load_scene(o.scene.empty() ? RTCD_DEFAULT_SCENE : o.scene);
+  if (o.steps) {
+    if (*o.steps < 1) throw UsageError("--steps must be at least 1");
+    scene.steps = *o.steps;
+    std::erase_if(scene.snapshot_steps, [&](int64_t k) { return k >= int64_t(scene.steps) || k < -int64_t(scene.steps); });
+  }
+  std::optional<tbb::global_control> threads;
+  if (o.threads < 0) throw UsageError("--threads must be at least 1 (0: all cores)");
+  if (o.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
+  const size_t thread_count = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+
+  const fs::path dir = o.out.empty() ? fs::path("runs") / (scene.name + "-" + timestamp()) : fs::path(o.out);
+  std::error_code ec;
+  fs::create_directories(dir, ec);
+  if (ec) throw UsageError("cannot create the output folder " + dir.string() + ": " + ec.message());
+  std::ofstream csv(dir / "steps.csv");
+  if (!csv) throw UsageError("cannot write " + (dir / "steps.csv").string());
+  csv << std::setprecision(9) << kCsvHeader << '\n';
+
+  sim::Simulation simulation(scene, o.backend);
+  for (const std::string& w : simulation.warnings()) std::cerr << "rtcd: warning: " << w << '\n';
+  std::cout << "scene " << scene.name << ": " << scene.body_count() << " bodies, " << scene.steps << " steps of "
+            << scene.time_step << " s, backend " << simulation.backend() << ", " << thread_count << " threads\n";
+
+  std::set<uint64_t> snapshot_at;
+  if (scene.has(sim::Effect::snapshots))
+    for (int64_t k : scene.snapshot_steps) snapshot_at.insert(k < 0 ? uint64_t(int64_t(scene.steps) + k) : uint64_t(k));
+  std::vector<std::string> pictures;
+
+  struct Totals {
+    double broad = 0, narrow = 0, solver = 0, effects = 0, total = 0;
+    double pairs = 0, rays = 0, contacts = 0;
+  } totals;
+  double rss_at_1000 = -1;
+  std::string failure;
+  Progress progress(scene.steps);
+  const auto start = Clock::now();
+  try {
+    for (uint64_t i = 0; i < scene.steps; ++i) {
+      const sim::StepRecord& r = simulation.step();
+      write_csv_row(csv, r);
+      totals.broad += r.seconds_broad;
+      totals.narrow += r.seconds_narrow;
+      totals.solver += r.seconds_solver;
+      totals.effects += r.seconds_effects;
+      totals.total += r.seconds_total;
+      totals.pairs += double(r.pairs);
+      totals.rays += double(r.rays_full + r.rays_predictive + r.rays_iterative);
+      totals.contacts += double(r.contacts);
+      if (snapshot_at.contains(i)) {
+        const fs::path png = dir / ("snapshot_" + std::to_string(i) + ".png");
+        sim::write_png(png.string(), simulation.snapshot(scene.snapshot_width, scene.snapshot_height));
+        pictures.push_back(png.string());
+      }
+      if (i + 1 == 1000) rss_at_1000 = peak_rss_mib();
+      progress.update(i + 1);
+    }
+  } catch (const sim::SimulationError& e) {
+    failure = e.what();
+    std::cout << '\n';
+  }
+  csv.close();
+  const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+  const uint64_t done = simulation.steps_done();
+
+  const sim::StepRecord& last = simulation.last();
+  const sim::StageCounters& c = simulation.counters();
+  nlohmann::json effects = nlohmann::json::array();
+  for (sim::Effect e : scene.effects) effects.push_back(sim::to_string(e));
+  nlohmann::json summary = {
+      {"scene", {{"name", scene.name}, {"file", scene.path}, {"bodies", scene.body_count()}}},
+      {"configuration",
+       {{"backend", simulation.backend()},
+        {"effects", effects},
+        {"time_step", scene.time_step},
+        {"steps", scene.steps},
+        {"seed", scene.seed},
+        {"sleeping", scene.sleeping},
+        {"gravity", {scene.gravity.x(), scene.gravity.y(), scene.gravity.z()}},
+        {"mode", to_string(scene.narrow.mode)},
+        {"predictive", scene.narrow.predictive},
+        {"projected", scene.narrow.projected},
+        {"max_walk_steps", scene.narrow.max_walk_steps},
+        {"displacement_threshold", scene.narrow.displacement_threshold},
+        {"distance_extension", scene.narrow.distance_extension},
+        {"points_per_pair", scene.points_per_pair},
+        {"solver_iterations", scene.solver_iterations},
+        {"interpenetration_every", scene.interpenetration_every}}},
+      {"backend", simulation.backend()},
+      {"devices", simulation.devices()},
+      {"threads", thread_count},
+      {"build_type", RTCD_BUILD_TYPE},
+      {"machine", {{"cpu", machine()}, {"cores", std::thread::hardware_concurrency()}}},
+      {"totals",
+       {{"steps", done},
+        {"wall_seconds", wall},
+        {"seconds_broad", totals.broad},
+        {"seconds_narrow", totals.narrow},
+        {"seconds_solver", totals.solver},
+        {"seconds_effects", totals.effects},
+        {"mean_pairs", done ? totals.pairs / done : 0.0},
+        {"mean_rays", done ? totals.rays / done : 0.0},
+        {"mean_contacts", done ? totals.contacts / done : 0.0},
+        {"final_bodies", last.bodies},
+        {"final_kinetic_energy", last.kinetic_energy},
+        {"state_hash", simulation.state_hash()},
+        {"peak_rss_mib", peak_rss_mib()}}},
+      {"stage_runs",
+       {{"gravity", c.gravity},
+        {"narrow_phase", c.narrow_phase},
+        {"friction", c.friction},
+        {"restitution", c.restitution},
+        {"speculative", c.speculative},
+        {"interpenetration", c.interpenetration},
+        {"snapshots", c.snapshots}}},
+      {"snapshots", pictures},
+  };
+  if (rss_at_1000 >= 0) summary["totals"]["peak_rss_mib_at_1000_steps"] = rss_at_1000;
+  if (last.interpenetration >= 0)
+    summary["totals"]["final_interpenetration"] = {
+        {"summed_depth", last.interpenetration}, {"deepest", last.deepest}, {"pairs", last.interpenetration_pairs}};
+  if (!failure.empty()) summary["error"] = failure;
+
+  std::vector<std::string> plots;
+  if (!o.no_plots && done > 0) {
+    const std::string command = "/usr/bin/python3 '" + std::string(RTCD_PLOT_SCRIPT) + "' '" + dir.string() + "'";
+    if (std::system(command.c_str()) != 0)
+      std::cerr << "rtcd: warning: the plots were not made (" << command << " failed; python3-matplotlib installed?)\n";
+    for (const char* name : {"time_per_step.png", "pairs_and_rays.png", "interpenetration.png"})
+      if (fs::exists(dir / name)) plots.push_back((dir / name).string());
+  }
+  summary["plots"] = plots;
+  std::ofstream(dir / "summary.json") << summary.dump(2) << '\n';
+
+  const auto row = [&](const char* stage, double seconds) {
+    std::printf("  %-14s %9.3f s  %8.2f ms/step  %5.1f%%\n", stage, seconds, done ? 1e3 * seconds / done : 0.0,
+                totals.total > 0 ? 100 * seconds / totals.total : 0.0);
+  };
+  std::printf("%llu steps in %.2f s wall (%.1f steps/s); per stage:\n", (unsigned long long)done, wall,
+              wall > 0 ? done / wall : 0.0);
+  row("broad phase", totals.broad);
+  row("narrow phase", totals.narrow);
+  row("solver", totals.solver);
+  row("other effects", totals.effects);
+  row("step total", totals.total);
+  std::printf("  mean pairs %.1f, rays %.0f, contacts %.1f per step; final kinetic energy %.4g J\n",
+              done ? totals.pairs / done : 0.0, done ? totals.rays / done : 0.0, done ? totals.contacts / done : 0.0,
+              last.kinetic_energy);
+  if (last.interpenetration >= 0)
+    std::printf("  interpenetration at the end: summed depth %.4g, deepest %.4g over %zu pairs\n", last.interpenetration,
+                last.deepest, last.interpenetration_pairs);
+  std::printf("  output: %s\n", dir.string().c_str());
+  if (!failure.empty()) {
+    std::cerr << "rtcd: " << failure << " (outputs so far kept in " << dir.string() << ")\n";
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace rtcd::cli

@@ -1,0 +1,23 @@
+// `rtcd run [SCENE]`: simulate a scene on Bullet with rtcd's narrow phase and
+// leave steps.csv, summary.json, plots and snapshots in a run folder.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+
+namespace rtcd::cli {
+
+struct RunOptions {
+  std::string scene;  // empty: the default scene
+  std::string backend;
+  std::optional<uint64_t> steps;
+  int threads = 0;  // 0: all
+  std::string out;  // empty: runs/<scene>-<timestamp>/
+  bool no_plots = false;
+};
+
+// Exit 0 done, 1 the simulation blew up (outputs so far kept), 2 bad input.
+int run_scene(const RunOptions& options);
+
+}  // namespace rtcd::cli

@@ -1,0 +1,92 @@
+// A scene simulated on Bullet with rtcd's narrow phase: the step is
+// assembled from the scene's effects alone, each stage counted and timed.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "rtcd/narrow_phase.hpp"
+#include "rtcd/sim/render.hpp"
+#include "rtcd/sim/scene.hpp"
+
+namespace rtcd::sim {
+
+// A simulation that blew up: the message names the step and the body.
+class SimulationError : public Error {
+ public:
+  using Error::Error;
+};
+
+// How often each stage ran: a stage whose effect is not listed stays at 0.
+struct StageCounters {
+  uint64_t steps = 0, gravity = 0, narrow_phase = 0, friction = 0, restitution = 0, speculative = 0,
+           interpenetration = 0, snapshots = 0;
+};
+
+// What one step did and cost.
+struct StepRecord {
+  uint64_t step = 0;
+  double time = 0;  // simulated time at the end of the step
+  size_t bodies = 0;
+  double seconds_broad = 0, seconds_narrow = 0, seconds_solver = 0, seconds_effects = 0, seconds_total = 0;
+  size_t pairs = 0, pairs_full = 0, pairs_iterative = 0;
+  size_t rays_full = 0, rays_predictive = 0, rays_iterative = 0;
+  size_t contacts = 0, predictive = 0, solver_points = 0, speculative_points = 0;
+  double kinetic_energy = 0;
+  // Set on the steps the interpenetration pass ran (else negative).
+  double interpenetration = -1;  // summed depth of every penetrating ray
+  double deepest = -1;           // the largest single depth, projected
+  size_t interpenetration_pairs = 0;
+};
+
+struct BodyState {
+  std::string label;  // "bodies[i]#k" or the spec's name with #k
+  Pose pose;          // the shape's frame (the mesh file's frame), world
+  Eigen::Vector3d linear_velocity = Eigen::Vector3d::Zero(), angular_velocity = Eigen::Vector3d::Zero();
+  bool is_static = false;
+  double mass = 0;
+  size_t spec = 0;
+};
+
+class Simulation {
+ public:
+  // backend overrides the scene's when not empty.
+  explicit Simulation(const Scene& scene, const std::string& backend = "");
+  ~Simulation();
+  Simulation(const Simulation&) = delete;
+  Simulation& operator=(const Simulation&) = delete;
+
+  // One step. Throws SimulationError when a pose turns non-finite.
+  const StepRecord& step();
+  const StepRecord& last() const;
+  uint64_t steps_done() const;
+
+  const Scene& scene() const;
+  const StageCounters& counters() const;
+  std::string backend() const;
+  std::vector<std::string> devices() const;
+  std::vector<BodyState> bodies() const;
+  // The narrow phase's answer on the last step (contacts, predictive rays).
+  const StepResult& last_narrow_phase() const;
+
+  // A bit-exact digest of every body's pose and velocities.
+  uint64_t state_hash() const;
+
+  // Warnings met while loading (self-intersecting meshes), one line each.
+  const std::vector<std::string>& warnings() const;
+
+  // The scene now, drawn with the last step's contact rays (the snapshots stage).
+  Image snapshot(int width, int height);
+
+  // Runs the interpenetration pass now (also on the steps the scene asks
+  // for); fills the last record's interpenetration fields.
+  void measure_interpenetration();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace rtcd::sim

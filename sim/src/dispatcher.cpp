@@ -1,0 +1,255 @@
+// The batch dispatcher. Bullet's manifolds were made for per-pair algorithms
+// that refresh a few points each step; writing them from a batch has traps,
+// each handled here (docs/ARCHITECTURE.md, "Simulation"):
+// - four points per manifold: a pair gets as many manifolds as its chosen
+//   points need, so no point is dropped by Bullet's own reduction;
+// - the breaking threshold: the solver skips points farther apart than a
+//   manifold's processing threshold, and refreshContactPoints drops them past
+//   the breaking one; both are set to the distance extension, and the points
+//   are never refreshed by Bullet (they are rewritten every step);
+// - hand-written points carry no combined friction or restitution: set here
+//   from the linked bodies (products, as Bullet combines them);
+// - rewriting points loses warm starting: each new point takes the impulses
+//   of last step's point from the same ray (source body and vertex);
+// - a pair the broad phase dropped keeps its manifolds until released: any
+//   pair not seen in a batch has them released.
+#include "rtcd/sim/dispatcher.hpp"
+
+#include <algorithm>
+#include <chrono>
+
+#include "rtcd/error.hpp"
+
+namespace rtcd::sim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+btVector3 bt(const Eigen::Vector3d& v) { return {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())}; }
+Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+
+uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
+
+// A contact or speculative point before it is written, in world coordinates.
+struct Candidate {
+  Eigen::Vector3d on_a, on_b, normal_on_b;  // Bullet's convention: normal on B points toward A
+  double distance;                           // < 0 penetrating, > 0 a speculative gap
+  int side;
+  uint32_t vertex;
+};
+
+// The deepest (or, for gaps, the nearest) first, then each next the one
+// farthest from those chosen. Deterministic: ties go to the earlier index.
+void choose_spread(const std::vector<Candidate>& c, size_t budget, std::vector<size_t>& chosen) {
+  if (c.empty() || budget == 0) return;
+  size_t first = 0;
+  for (size_t i = 1; i < c.size(); ++i)
+    if (c[i].distance < c[first].distance) first = i;
+  std::vector<double> gap(c.size(), std::numeric_limits<double>::infinity());
+  for (size_t pick = first, n = 0;;) {
+    chosen.push_back(pick);
+    gap[pick] = -1.0;
+    if (++n == std::min(budget, c.size())) break;
+    size_t far = 0;
+    double best = -1.0;
+    for (size_t i = 0; i < c.size(); ++i) {
+      if (gap[i] < 0) continue;
+      gap[i] = std::min(gap[i], (c[i].on_a - c[pick].on_a).squaredNorm());
+      if (gap[i] > best) best = gap[i], far = i;
+    }
+    pick = far;
+  }
+}
+
+}  // namespace
+
+BatchDispatcher::BatchDispatcher(btCollisionConfiguration* configuration, NarrowPhase& narrow, DispatcherOptions options)
+    : btCollisionDispatcher(configuration), narrow_(narrow), options_(options) {
+  if (options_.points_per_pair < 1 || options_.points_per_pair > 64)
+    throw ConfigError("points_per_pair is " + std::to_string(options_.points_per_pair) + ", must be in [1, 64]");
+}
+
+BatchDispatcher::~BatchDispatcher() {
+  for (auto& [key, held] : held_) release(held);
+}
+
+void BatchDispatcher::link(btCollisionObject* object, const BodyLink& link) {
+  if (!object) throw UsageError("link: null collision object");
+  if (slot_of(object)) throw UsageError("link: the object is linked already");
+  object->setUserIndex3(int(slots_.size()));
+  slots_.push_back({object, link});
+}
+
+void BatchDispatcher::unlink(btCollisionObject* object) {
+  const Slot* slot = slot_of(object);
+  if (!slot) throw UsageError("unlink: the object is not linked");
+  const BodyId id = slot->link.id;
+  for (auto it = held_.begin(); it != held_.end();) {
+    if (BodyId(it->first >> 32) == id || BodyId(it->first & 0xffffffffu) == id) {
+      release(it->second);
+      it = held_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  slots_[object->getUserIndex3()].object = nullptr;
+  object->setUserIndex3(-1);
+}
+
+const BatchDispatcher::Slot* BatchDispatcher::slot_of(const btCollisionObject* object) const {
+  const int i = object->getUserIndex3();
+  if (i < 0 || size_t(i) >= slots_.size() || slots_[i].object != object) return nullptr;
+  return &slots_[i];
+}
+
+Pose BatchDispatcher::shape_pose(const btCollisionObject* object) const {
+  const Slot* slot = slot_of(object);
+  if (!slot) throw UsageError("shape_pose: the object is not linked");
+  const btTransform& t = object->getWorldTransform();
+  const btQuaternion q = t.getRotation();
+  Pose body;
+  body.position = eigen(t.getOrigin());
+  body.orientation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized();
+  return body * slot->link.shape_in_body;
+}
+
+void BatchDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairs, const btDispatcherInfo& info,
+                                                btDispatcher*) {
+  auto t0 = Clock::now();
+  batch_ = {batch_.calls + 1};
+  batch_pairs_.clear();
+  batch_objects_.clear();
+  btBroadphasePairArray& array = pairs->getOverlappingPairArray();
+  for (int i = 0; i < pairs->getNumOverlappingPairs(); ++i) {
+    btBroadphasePair& p = array[i];
+    auto* o0 = static_cast<btCollisionObject*>(p.m_pProxy0->m_clientObject);
+    auto* o1 = static_cast<btCollisionObject*>(p.m_pProxy1->m_clientObject);
+    const Slot* s0 = slot_of(o0);
+    const Slot* s1 = slot_of(o1);
+    if (!s0 || !s1) {
+      getNearCallback()(p, *this, info);  // Bullet's own algorithm for this pair
+      continue;
+    }
+    if (!needsCollision(o0, o1)) {
+      // Both asleep (or filtered): their manifolds stay as they were.
+      if (auto it = held_.find(pair_key(s0->link.id, s1->link.id)); it != held_.end()) it->second.seen = batch_.calls;
+      continue;
+    }
+    batch_pairs_.push_back({s0->link.id, s1->link.id});
+    batch_objects_.push_back({o0, o1});
+  }
+  for (const auto& [o0, o1] : batch_objects_) {
+    narrow_.set_pose(slot_of(o0)->link.id, shape_pose(o0));
+    narrow_.set_pose(slot_of(o1)->link.id, shape_pose(o1));
+  }
+  auto t1 = Clock::now();
+  narrow_.detect(batch_pairs_, result_);
+  batch_.seconds_narrow = seconds_since(t1);
+  batch_.pairs = batch_pairs_.size();
+
+  for (size_t i = 0; i < batch_pairs_.size(); ++i) {
+    PairManifolds& held = held_[pair_key(batch_pairs_[i].a, batch_pairs_[i].b)];
+    held.seen = batch_.calls;
+    fill(result_.pairs[i], batch_objects_[i].first, batch_objects_[i].second, held);
+  }
+  for (auto it = held_.begin(); it != held_.end();) {
+    if (it->second.seen != batch_.calls) {
+      release(it->second);
+      it = held_.erase(it);
+    } else {
+      ++it;
+    }
+  }
+  batch_.seconds_manifolds = seconds_since(t0) - batch_.seconds_narrow;
+}
+
+void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btCollisionObject* b, PairManifolds& held) {
+  std::vector<Candidate> touching, gaps;
+  for (const Contact& c : result_.contacts_of(pair)) {
+    const double depth = c.push.norm();
+    if (!(depth > 0)) continue;
+    const Eigen::Vector3d out = c.push / depth;  // moves the source vertex out of the target
+    if (c.source == Side::a)
+      touching.push_back({c.origin, c.origin + c.push, out, -depth, 0, c.vertex});
+    else
+      touching.push_back({c.origin + c.push, c.origin, -out, -depth, 1, c.vertex});
+  }
+  if (options_.speculative) {
+    for (const PredictiveRay& r : result_.predictive_of(pair)) {
+      // The gap along the contact normal, not along the ray: how far the
+      // vertex is from the impacted triangle's plane.
+      const double gap = r.distance * std::abs(r.direction.dot(r.normal));
+      const Eigen::Vector3d on_target = r.origin - gap * r.normal;
+      if (r.source == Side::a)
+        gaps.push_back({r.origin, on_target, r.normal, gap, 0, r.vertex});
+      else
+        gaps.push_back({on_target, r.origin, -r.normal, gap, 1, r.vertex});
+    }
+  }
+  std::vector<size_t> chosen_touching, chosen_gaps;
+  choose_spread(touching, options_.points_per_pair, chosen_touching);
+  choose_spread(gaps, options_.points_per_pair - chosen_touching.size(), chosen_gaps);
+
+  // Last step's points, for warm starting, keyed by their ray.
+  std::vector<btManifoldPoint> previous;
+  for (btPersistentManifold* m : held.manifolds)
+    for (int i = 0; i < m->getNumContacts(); ++i) previous.push_back(m->getContactPoint(i));
+
+  const size_t count = chosen_touching.size() + chosen_gaps.size();
+  const size_t needed = (count + MANIFOLD_CACHE_SIZE - 1) / MANIFOLD_CACHE_SIZE;
+  while (held.manifolds.size() > needed) {
+    releaseManifold(held.manifolds.back());
+    held.manifolds.pop_back();
+  }
+  while (held.manifolds.size() < needed) held.manifolds.push_back(getNewManifold(a, b));
+  const double extension = narrow_.config().distance_extension;
+  for (btPersistentManifold* m : held.manifolds) {
+    m->clearManifold();
+    m->setBodies(a, b);
+    m->setContactBreakingThreshold(btScalar(extension));
+    m->setContactProcessingThreshold(btScalar(extension));
+  }
+
+  const BodyLink& la = slot_of(a)->link;
+  const BodyLink& lb = slot_of(b)->link;
+  const btScalar friction = options_.friction ? btScalar(la.friction * lb.friction) : btScalar(0);
+  const btScalar restitution = options_.restitution ? btScalar(la.restitution * lb.restitution) : btScalar(0);
+  size_t written = 0;
+  const auto write = [&](const Candidate& c) {
+    const btVector3 pa = bt(c.on_a), pb = bt(c.on_b);
+    btManifoldPoint pt(a->getWorldTransform().invXform(pa), b->getWorldTransform().invXform(pb), bt(c.normal_on_b),
+                       btScalar(c.distance));
+    pt.m_positionWorldOnA = pa;
+    pt.m_positionWorldOnB = pb;
+    pt.m_combinedFriction = friction;
+    // A speculative point has not touched: it must not bounce.
+    pt.m_combinedRestitution = c.distance < 0 ? restitution : btScalar(0);
+    pt.m_partId0 = c.side;
+    pt.m_index0 = int(c.vertex);
+    for (const btManifoldPoint& old : previous) {
+      if (old.m_partId0 == c.side && old.m_index0 == int(c.vertex)) {
+        pt.m_appliedImpulse = old.m_appliedImpulse;
+        pt.m_appliedImpulseLateral1 = old.m_appliedImpulseLateral1;
+        pt.m_appliedImpulseLateral2 = old.m_appliedImpulseLateral2;
+        pt.m_lifeTime = old.m_lifeTime + 1;
+        ++batch_.warm_started;
+        break;
+      }
+    }
+    held.manifolds[written / MANIFOLD_CACHE_SIZE]->addManifoldPoint(pt, /*isPredictive=*/true);
+    ++written;
+  };
+  for (size_t i : chosen_touching) write(touching[i]);
+  for (size_t i : chosen_gaps) write(gaps[i]);
+  batch_.points += written;
+  batch_.speculative_points += chosen_gaps.size();
+}
+
+void BatchDispatcher::release(PairManifolds& held) {
+  for (btPersistentManifold* m : held.manifolds) releaseManifold(m);
+  held.manifolds.clear();
+}
+
+}  // namespace rtcd::sim

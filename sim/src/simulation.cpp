@@ -1,0 +1,538 @@
+// The simulation host: a Bullet world whose collision step is rtcd's batch
+// dispatcher, stages assembled from the scene's effects.
+#include "rtcd/sim/simulation.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <random>
+
+#include <btBulletDynamicsCommon.h>
+
+#include "rtcd/mesh_check.hpp"
+#include "rtcd/mesh_gen.hpp"
+#include "rtcd/sim/dispatcher.hpp"
+#include "rtcd/sim/mass.hpp"
+
+namespace rtcd::sim {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+
+btVector3 bt(const Eigen::Vector3d& v) { return {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())}; }
+Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
+btTransform bt(const Pose& p) {
+  const Eigen::Quaterniond& q = p.orientation;
+  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())), bt(p.position));
+}
+Pose pose_of(const btTransform& t) {
+  const btQuaternion q = t.getRotation();
+  Pose p;
+  p.position = eigen(t.getOrigin());
+  p.orientation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized();
+  return p;
+}
+
+// A dispatcher for scenes without `contacts`: the broad phase still runs,
+// nothing answers its pairs.
+class NoContacts final : public btCollisionDispatcher {
+ public:
+  using btCollisionDispatcher::btCollisionDispatcher;
+  void dispatchAllCollisionPairs(btOverlappingPairCache*, const btDispatcherInfo&, btDispatcher*) override {}
+};
+
+// Bullet's world with its collision and solver phases timed apart.
+class TimedWorld final : public btDiscreteDynamicsWorld {
+ public:
+  using btDiscreteDynamicsWorld::btDiscreteDynamicsWorld;
+  double broad = 0, narrow = 0, solver = 0;
+
+  void performDiscreteCollisionDetection() override {
+    auto t = Clock::now();
+    updateAabbs();
+    computeOverlappingPairs();
+    broad += seconds_since(t);
+    t = Clock::now();
+    getDispatcher()->dispatchAllCollisionPairs(m_broadphasePairCache->getOverlappingPairCache(), getDispatchInfo(),
+                                               m_dispatcher1);
+    narrow += seconds_since(t);
+  }
+
+ protected:
+  void solveConstraints(btContactSolverInfo& info) override {
+    auto t = Clock::now();
+    btDiscreteDynamicsWorld::solveConstraints(info);
+    solver += seconds_since(t);
+  }
+};
+
+// Everything bodies of one spec share.
+struct Kind {
+  std::shared_ptr<const Shape> shape;
+  ShapeId id = 0, probe_id = 0;
+  MassProperties mass;                  // dynamic kinds only
+  Pose principal;                       // principal frame in the shape frame (identity when static)
+  std::unique_ptr<btBoxShape> bounds;   // the broad phase's box, in the principal frame
+  std::unique_ptr<btCompoundShape> collision;
+  RenderMesh render;
+};
+
+struct Body {
+  std::unique_ptr<btRigidBody> rigid;
+  BodyId id = 0;
+  size_t spec = 0;  // index into scene.bodies, or SIZE_MAX for the ground
+  std::string label;
+};
+
+// Uniform in [0, 1) from 53 random bits: the same on every platform.
+double unit(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
+
+Eigen::Quaterniond random_orientation(std::mt19937_64& rng) {
+  // Shoemake's uniform rotation from three uniforms.
+  const double u1 = unit(rng), u2 = 2 * M_PI * unit(rng), u3 = 2 * M_PI * unit(rng);
+  const double a = std::sqrt(1 - u1), b = std::sqrt(u1);
+  return Eigen::Quaterniond(b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3)).normalized();
+}
+
+RenderMesh render_mesh(const Mesh& m) {
+  RenderMesh r;
+  r.positions.assign(m.positions().begin(), m.positions().end());
+  for (const auto& t : m.triangles()) r.triangles.push_back({t[0], t[1], t[2]});
+  return r;
+}
+
+Eigen::Vector3f palette(size_t i) {
+  static const Eigen::Vector3f colours[] = {{0.85f, 0.55f, 0.25f}, {0.35f, 0.6f, 0.85f}, {0.5f, 0.75f, 0.4f},
+                                            {0.8f, 0.45f, 0.6f},  {0.7f, 0.7f, 0.35f},  {0.55f, 0.5f, 0.8f}};
+  return colours[i % std::size(colours)];
+}
+
+}  // namespace
+
+struct Simulation::Impl {
+  Scene scene;
+  std::string backend_name;
+  std::unique_ptr<NarrowPhase> narrow;  // the simulation's (contacts only)
+  std::unique_ptr<NarrowPhase> probe;   // the interpenetration pass's: stateless, full tracing
+  std::unique_ptr<btDefaultCollisionConfiguration> configuration;
+  std::unique_ptr<btCollisionDispatcher> dispatcher;
+  BatchDispatcher* batch = nullptr;  // dispatcher, when contacts are simulated
+  std::unique_ptr<btDbvtBroadphase> broadphase;
+  std::unique_ptr<btSequentialImpulseConstraintSolver> solver;
+  std::unique_ptr<TimedWorld> world;
+  std::vector<Kind> kinds;
+  std::unique_ptr<btStaticPlaneShape> ground_plane;
+  std::shared_ptr<const Shape> ground_shape;
+  std::vector<Body> bodies;
+  std::vector<uint32_t> emitted;  // per spec, bodies emitted so far
+  std::mt19937_64 rng;
+  StageCounters counters;
+  StepRecord record;
+  std::vector<std::string> warnings;
+
+  explicit Impl(const Scene& s, const std::string& backend_override);
+  ~Impl();
+  void make_kinds();
+  void add_body(size_t spec, const Pose& shape_pose, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
+                const std::string& label);
+  void add_ground();
+  void spawn_initial();
+  void emit(double time);
+  BodyId register_shape_body(ShapeId id, ShapeId probe_id, const Pose& pose);
+  void measure();
+};
+
+Simulation::Impl::Impl(const Scene& s, const std::string& backend_override) : scene(s), rng(s.seed) {
+  backend_name = backend_override.empty() ? scene.backend : backend_override;
+  const bool contacts = scene.has(Effect::contacts);
+  if (contacts) narrow = make_narrow_phase(backend_name, scene.narrow);
+  if (scene.has(Effect::interpenetration)) {
+    Config c = scene.narrow;
+    c.mode = Mode::full;
+    c.predictive = false;
+    probe = make_narrow_phase(backend_name, c);
+  }
+  if (narrow) backend_name = narrow->name();
+  else if (probe) backend_name = probe->name();
+  else backend_name = "none";
+
+  configuration = std::make_unique<btDefaultCollisionConfiguration>();
+  if (contacts) {
+    DispatcherOptions options;
+    options.points_per_pair = scene.points_per_pair;
+    options.speculative = scene.has(Effect::speculative);
+    options.friction = scene.has(Effect::friction);
+    options.restitution = scene.has(Effect::restitution);
+    auto d = std::make_unique<BatchDispatcher>(configuration.get(), *narrow, options);
+    batch = d.get();
+    dispatcher = std::move(d);
+  } else {
+    dispatcher = std::make_unique<NoContacts>(configuration.get());
+  }
+  broadphase = std::make_unique<btDbvtBroadphase>();
+  solver = std::make_unique<btSequentialImpulseConstraintSolver>();
+  world = std::make_unique<TimedWorld>(dispatcher.get(), broadphase.get(), solver.get(), configuration.get());
+  world->setGravity(btVector3(0, 0, 0));  // the gravity stage applies it, when listed
+  world->getSolverInfo().m_numIterations = int(scene.solver_iterations);
+  make_kinds();
+  if (scene.ground.present) add_ground();
+  emitted.assign(scene.bodies.size(), 0);
+  spawn_initial();
+}
+
+Simulation::Impl::~Impl() {
+  for (Body& b : bodies) {
+    if (batch) batch->unlink(b.rigid.get());
+    world->removeRigidBody(b.rigid.get());
+  }
+}
+
+void Simulation::Impl::make_kinds() {
+  const double grow = 0.5 * scene.narrow.distance_extension;  // two bodies within the extension overlap
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
+    const BodySpec& spec = scene.bodies[i];
+    Kind k;
+    if (!spec.mesh.empty()) {
+      MeshData data = read_mesh_file(spec.mesh);
+      for (auto& p : data.positions) p *= float(spec.scale);
+      MeshOptions options;
+      options.weld = spec.weld;
+      Mesh mesh(std::move(data.positions), std::move(data.triangles), options);
+      if (std::string w = self_intersection_warning(mesh, spec.mesh); !w.empty()) warnings.push_back(w);
+      k.render = render_mesh(mesh);
+      k.shape = std::make_shared<Shape>(std::move(mesh));
+    } else if (spec.sphere) {
+      k.shape = std::make_shared<Shape>(Sphere{*spec.sphere});
+      k.render = render_mesh(gen::icosphere(*spec.sphere, 3));
+    } else {
+      k.shape = std::make_shared<Shape>(Box{*spec.box});
+      k.render = render_mesh(gen::box(*spec.box));
+    }
+    if (!spec.is_static) {
+      k.mass = spec.mass ? mass_properties_for_mass(*k.shape, *spec.mass) : mass_properties(*k.shape, *spec.density);
+      k.principal = k.mass.principal_frame();
+    }
+    // The shape's bounds seen from its principal frame, grown.
+    Aabb local;
+    const Pose to_principal = k.principal.inverse();
+    const auto corners = [&](const Aabb& b) {
+      for (int c = 0; c < 8; ++c)
+        local.extend(to_principal.apply({c & 1 ? b.max.x() : b.min.x(), c & 2 ? b.max.y() : b.min.y(),
+                                         c & 4 ? b.max.z() : b.min.z()}));
+    };
+    if (const Mesh* m = k.shape->mesh()) {
+      for (const auto& p : m->positions()) local.extend(to_principal.apply(p.cast<double>()));
+    } else {
+      corners(k.shape->bounds());
+    }
+    local = local.grown(grow);
+    k.bounds = std::make_unique<btBoxShape>(bt(0.5 * (local.max - local.min)));
+    k.collision = std::make_unique<btCompoundShape>(false);
+    k.collision->addChildShape(btTransform(btQuaternion::getIdentity(), bt(0.5 * (local.max + local.min))), k.bounds.get());
+    if (narrow) k.id = narrow->add_shape(k.shape);
+    if (probe) k.probe_id = probe->add_shape(k.shape);
+    kinds.push_back(std::move(k));
+  }
+}
+
+BodyId Simulation::Impl::register_shape_body(ShapeId id, ShapeId probe_id, const Pose& pose) {
+  BodyId body = BodyId(bodies.size());
+  if (narrow && narrow->add_body(id, pose) != body) throw std::logic_error("narrow-phase body ids out of step");
+  if (probe && probe->add_body(probe_id, pose) != body) throw std::logic_error("probe body ids out of step");
+  return body;
+}
+
+void Simulation::Impl::add_ground() {
+  const Ground& g = scene.ground;
+  ground_shape = std::make_shared<Shape>(HalfSpace{});
+  Pose pose;
+  pose.orientation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), g.normal);
+  pose.position = g.normal * g.height;
+  const ShapeId id = narrow ? narrow->add_shape(ground_shape) : 0;
+  const ShapeId probe_id = probe ? probe->add_shape(ground_shape) : 0;
+  ground_plane = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), btScalar(0));
+  btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, ground_plane.get());
+  info.m_startWorldTransform = bt(pose);
+  Body b;
+  b.rigid = std::make_unique<btRigidBody>(info);
+  b.id = register_shape_body(id, probe_id, pose);
+  b.spec = SIZE_MAX;
+  b.label = "ground";
+  world->addRigidBody(b.rigid.get());
+  if (batch) batch->link(b.rigid.get(), {b.id, Pose{}, g.friction, g.restitution});
+  bodies.push_back(std::move(b));
+}
+
+void Simulation::Impl::add_body(size_t spec_index, const Pose& shape_pose, const Eigen::Vector3d& velocity,
+                                const Eigen::Vector3d& spin, const std::string& label) {
+  const BodySpec& spec = scene.bodies[spec_index];
+  Kind& k = kinds[spec_index];
+  const double mass = spec.is_static ? 0.0 : k.mass.mass;
+  btRigidBody::btRigidBodyConstructionInfo info(btScalar(mass), nullptr, k.collision.get(),
+                                                spec.is_static ? btVector3(0, 0, 0) : bt(k.mass.principal_moments));
+  info.m_startWorldTransform = bt(shape_pose * k.principal);
+  info.m_friction = btScalar(spec.friction);
+  info.m_restitution = btScalar(spec.restitution);
+  Body b;
+  b.rigid = std::make_unique<btRigidBody>(info);
+  b.id = register_shape_body(k.id, k.probe_id, shape_pose);
+  b.spec = spec_index;
+  b.label = label;
+  if (!spec.is_static) {
+    b.rigid->setLinearVelocity(bt(velocity));
+    b.rigid->setAngularVelocity(bt(spin));
+    if (!scene.sleeping) b.rigid->setActivationState(DISABLE_DEACTIVATION);
+  }
+  world->addRigidBody(b.rigid.get());
+  if (batch) batch->link(b.rigid.get(), {b.id, k.principal, spec.friction, spec.restitution});
+  bodies.push_back(std::move(b));
+}
+
+void Simulation::Impl::spawn_initial() {
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
+    const BodySpec& spec = scene.bodies[i];
+    if (spec.emitter) continue;
+    const std::string base = spec.label + (spec.count > 1 ? "#" : "");
+    for (uint32_t n = 0; n < spec.count; ++n) {
+      Pose pose = spec.pose;
+      if (spec.grid) {
+        const auto& g = *spec.grid;
+        const uint32_t ix = n % g.cells[0], iy = (n / g.cells[0]) % g.cells[1], iz = n / (g.cells[0] * g.cells[1]);
+        pose.position = g.origin + g.spacing.cwiseProduct(Eigen::Vector3d(ix, iy, iz));
+        for (int a = 0; a < 3; ++a) pose.position[a] += g.jitter * (2 * unit(rng) - 1);
+        if (g.random_orientation) pose.orientation = random_orientation(rng);
+      }
+      add_body(i, pose, spec.velocity, spec.angular_velocity, spec.count > 1 ? base + std::to_string(n) : spec.label);
+    }
+  }
+}
+
+void Simulation::Impl::emit(double time) {
+  for (size_t i = 0; i < scene.bodies.size(); ++i) {
+    const BodySpec& spec = scene.bodies[i];
+    if (!spec.emitter) continue;
+    const auto& e = *spec.emitter;
+    // Body n appears at time n / rate.
+    while (emitted[i] < spec.count && double(emitted[i]) / e.rate <= time + 1e-9) {
+      const double at = double(emitted[i]) / e.rate, angle = e.angular_speed * at;
+      Pose pose;
+      pose.position = e.centre + e.radius * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
+      if (e.random_orientation) pose.orientation = random_orientation(rng);
+      add_body(i, pose, spec.velocity, spec.angular_velocity, spec.label + "#" + std::to_string(emitted[i]));
+      ++emitted[i];
+    }
+  }
+}
+
+void Simulation::Impl::measure() {
+  // Every pair whose boxes overlap, traced in full by the probe.
+  std::vector<BodyPair> pairs;
+  btOverlappingPairCache* cache = world->getBroadphase()->getOverlappingPairCache();
+  btBroadphasePairArray& array = cache->getOverlappingPairArray();
+  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+    auto* o0 = static_cast<btRigidBody*>(array[i].m_pProxy0->m_clientObject);
+    auto* o1 = static_cast<btRigidBody*>(array[i].m_pProxy1->m_clientObject);
+    if (o0->isStaticObject() && o1->isStaticObject()) continue;
+    pairs.push_back({BodyId(o0->getUserIndex()), BodyId(o1->getUserIndex())});
+  }
+  for (const Body& b : bodies) {
+    const Kind* k = b.spec == SIZE_MAX ? nullptr : &kinds[b.spec];
+    probe->set_pose(b.id, pose_of(b.rigid->getWorldTransform()) * (k ? k->principal.inverse() : Pose{}));
+  }
+  const StepResult r = probe->detect(pairs);
+  double sum = 0, deepest = 0;
+  for (const Contact& c : r.contacts) {
+    sum += c.depth;
+    deepest = std::max(deepest, c.projected_depth);
+  }
+  record.interpenetration = sum;
+  record.deepest = deepest;
+  record.interpenetration_pairs = pairs.size();
+  ++counters.interpenetration;
+}
+
+Simulation::Simulation(const Scene& scene, const std::string& backend) : impl_(std::make_unique<Impl>(scene, backend)) {
+  // The probe reads body ids back from the rigid bodies.
+  for (const Body& b : impl_->bodies) b.rigid->setUserIndex(int(b.id));
+}
+
+Simulation::~Simulation() = default;
+
+const StepRecord& Simulation::step() {
+  Impl& m = *impl_;
+  const auto t0 = Clock::now();
+  const uint64_t index = m.counters.steps;
+  StepRecord& r = m.record;
+  r = {};
+  r.step = index;
+  r.time = double(index + 1) * m.scene.time_step;
+
+  double effects = 0;
+  auto t = Clock::now();
+  const size_t before = m.bodies.size();
+  m.emit(double(index) * m.scene.time_step);
+  for (size_t i = before; i < m.bodies.size(); ++i) m.bodies[i].rigid->setUserIndex(int(m.bodies[i].id));
+  if (m.scene.has(Effect::gravity)) {
+    const btVector3 g = bt(m.scene.gravity);
+    for (Body& b : m.bodies)
+      if (!b.rigid->isStaticObject()) b.rigid->applyCentralForce(g / b.rigid->getInvMass());
+    ++m.counters.gravity;
+  }
+  effects += seconds_since(t);
+
+  m.world->broad = m.world->narrow = m.world->solver = 0;
+  m.world->stepSimulation(btScalar(m.scene.time_step), 0, btScalar(m.scene.time_step));
+  ++m.counters.steps;
+
+  // A body that blew up stops the run, named.
+  for (const Body& b : m.bodies) {
+    const btTransform& x = b.rigid->getWorldTransform();
+    const btVector3& o = x.getOrigin();
+    const btQuaternion q = x.getRotation();
+    if (!std::isfinite(o.x() + o.y() + o.z() + q.x() + q.y() + q.z() + q.w()))
+      throw SimulationError("step " + std::to_string(index) + ": body " + b.label + " has a non-finite pose");
+  }
+
+  r.bodies = m.bodies.size();
+  r.seconds_broad = m.world->broad;
+  r.seconds_narrow = m.world->narrow;
+  r.seconds_solver = m.world->solver;
+  if (m.batch) {
+    ++m.counters.narrow_phase;
+    const auto& batch = m.batch->last_batch();
+    const StepResult& n = m.batch->last_step();
+    if (m.scene.has(Effect::friction)) ++m.counters.friction;
+    if (m.scene.has(Effect::restitution)) ++m.counters.restitution;
+    if (m.scene.has(Effect::speculative)) ++m.counters.speculative;
+    r.pairs = batch.pairs;
+    r.pairs_full = n.stats.pairs_full;
+    r.pairs_iterative = n.stats.pairs_iterative;
+    r.rays_full = n.stats.rays_full;
+    r.rays_predictive = n.stats.rays_predictive;
+    r.rays_iterative = n.stats.rays_iterative;
+    r.contacts = n.contacts.size();
+    r.predictive = n.predictive.size();
+    r.solver_points = batch.points;
+    r.speculative_points = batch.speculative_points;
+  }
+  for (const Body& b : m.bodies) {
+    if (b.rigid->isStaticObject()) continue;
+    const Kind& k = m.kinds[b.spec];
+    const Eigen::Vector3d v = eigen(b.rigid->getLinearVelocity());
+    const Eigen::Vector3d w_body = eigen(quatRotate(b.rigid->getOrientation().inverse(), b.rigid->getAngularVelocity()));
+    r.kinetic_energy += 0.5 * k.mass.mass * v.squaredNorm() + 0.5 * w_body.dot(k.mass.principal_moments.cwiseProduct(w_body));
+  }
+
+  t = Clock::now();
+  const bool last_step = m.counters.steps == m.scene.steps;
+  if (m.probe && ((index + 1) % m.scene.interpenetration_every == 0 || last_step)) m.measure();
+  effects += seconds_since(t);
+  r.seconds_effects = effects;
+  r.seconds_total = seconds_since(t0);
+  return r;
+}
+
+const StepRecord& Simulation::last() const { return impl_->record; }
+uint64_t Simulation::steps_done() const { return impl_->counters.steps; }
+const Scene& Simulation::scene() const { return impl_->scene; }
+const StageCounters& Simulation::counters() const { return impl_->counters; }
+std::string Simulation::backend() const { return impl_->backend_name; }
+const std::vector<std::string>& Simulation::warnings() const { return impl_->warnings; }
+
+std::vector<std::string> Simulation::devices() const {
+  if (impl_->narrow) return impl_->narrow->devices();
+  if (impl_->probe) return impl_->probe->devices();
+  return {};
+}
+
+const StepResult& Simulation::last_narrow_phase() const {
+  static const StepResult none;
+  return impl_->batch ? impl_->batch->last_step() : none;
+}
+
+std::vector<BodyState> Simulation::bodies() const {
+  std::vector<BodyState> out;
+  for (const Body& b : impl_->bodies) {
+    if (b.spec == SIZE_MAX) continue;
+    const Kind& k = impl_->kinds[b.spec];
+    BodyState s;
+    s.label = b.label;
+    s.pose = pose_of(b.rigid->getWorldTransform()) * k.principal.inverse();
+    s.linear_velocity = eigen(b.rigid->getLinearVelocity());
+    s.angular_velocity = eigen(b.rigid->getAngularVelocity());
+    s.is_static = b.rigid->isStaticObject();
+    s.mass = s.is_static ? 0.0 : k.mass.mass;
+    s.spec = b.spec;
+    out.push_back(s);
+  }
+  return out;
+}
+
+uint64_t Simulation::state_hash() const {
+  // FNV-1a over the exact bits of every transform and velocity.
+  uint64_t h = 1469598103934665603ull;
+  const auto mix = [&h](btScalar v) {
+    uint32_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    for (int i = 0; i < 4; ++i) {
+      h ^= (bits >> (8 * i)) & 0xffu;
+      h *= 1099511628211ull;
+    }
+  };
+  for (const Body& b : impl_->bodies) {
+    const btTransform& x = b.rigid->getWorldTransform();
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) mix(x.getBasis()[r][c]);
+    for (int i = 0; i < 3; ++i) {
+      mix(x.getOrigin()[i]);
+      mix(b.rigid->getLinearVelocity()[i]);
+      mix(b.rigid->getAngularVelocity()[i]);
+    }
+  }
+  return h;
+}
+
+void Simulation::measure_interpenetration() {
+  if (!impl_->probe) throw UsageError("the scene does not list \"interpenetration\"");
+  impl_->measure();
+}
+
+Image Simulation::snapshot(int width, int height) {
+  const Impl& m = *impl_;
+  ++impl_->counters.snapshots;
+  std::vector<RenderMesh> meshes;
+  for (const Kind& k : m.kinds) meshes.push_back(k.render);
+  std::vector<RenderInstance> instances;
+  Aabb box;
+  for (const BodyState& s : bodies()) {
+    instances.push_back({uint32_t(s.spec), s.pose, s.is_static ? Eigen::Vector3f(0.6f, 0.6f, 0.65f) : palette(s.spec)});
+    box.extend(s.pose.apply(m.kinds[s.spec].shape->bounds().min));
+    box.extend(s.pose.apply(m.kinds[s.spec].shape->bounds().max));
+  }
+  if (box.empty()) box = {Eigen::Vector3d::Constant(-1), Eigen::Vector3d::Constant(1)};
+  if (m.scene.ground.present) {
+    // The ground drawn as a square around the bodies, in the plane.
+    const double half = 0.75 * (box.max - box.min).norm() + 1.0;
+    RenderMesh quad;
+    quad.positions = {{float(-half), float(-half), 0}, {float(half), float(-half), 0}, {float(half), float(half), 0},
+                      {float(-half), float(half), 0}};
+    quad.triangles = {{0, 1, 2}, {0, 2, 3}};
+    meshes.push_back(quad);
+    Pose ground;
+    ground.orientation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), m.scene.ground.normal);
+    const Eigen::Vector3d centre = 0.5 * (box.min + box.max);
+    ground.position = centre - m.scene.ground.normal * (m.scene.ground.normal.dot(centre) - m.scene.ground.height);
+    instances.push_back({uint32_t(meshes.size() - 1), ground, Eigen::Vector3f(0.82f, 0.82f, 0.78f)});
+  }
+  std::vector<RenderLine> lines;
+  for (const Contact& c : last_narrow_phase().contacts)
+    lines.push_back({c.origin, c.origin + c.depth * c.direction, Eigen::Vector3f(0.9f, 0.1f, 0.1f)});
+  Camera camera = frame_camera(box);
+  if (m.scene.camera_eye) camera.eye = *m.scene.camera_eye;
+  if (m.scene.camera_target) camera.target = *m.scene.camera_target;
+  return sim::render(meshes, instances, lines, camera, width, height);
+}
+
+}  // namespace rtcd::sim
