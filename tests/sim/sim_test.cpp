@@ -1,0 +1,259 @@
+// The simulation host on small scenes that finish in seconds: resting,
+// bouncing, stacking, sliding with and without friction, effects that are not
+// listed, speculative contacts without ghosts, bad scenes, reproducibility.
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <numbers>
+
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include "rtcd/sim/simulation.hpp"
+#include "support_sim.hpp"
+
+namespace rtcd::test {
+namespace {
+
+using sim::Effect;
+using sim::Simulation;
+
+constexpr double kG = 9.81;
+
+// A box of half extent 0.25 resting on the ground keeps its height.
+TEST(Sim, BoxRestsOnTheGround) {
+  Simulation s(scene_from(R"({
+    "time_step": 0.004166666666666667, "steps": 1000,
+    "effects": ["gravity", "contacts", "friction", "predictive", "projected"],
+    "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 2, "pose": {"position": [0, 0, 0.25]}}]
+  })"));
+  double worst = 0;
+  for (int i = 0; i < 1000; ++i) {
+    s.step();
+    worst = std::max(worst, std::abs(s.bodies()[0].pose.position.z() - 0.25));
+  }
+  EXPECT_LT(worst, 1e-3);
+}
+
+// A sphere of radius 0.5 dropped from 1 m (lowest point) with restitution
+// e = 0.8 bounces to e² h. At 1 kHz the impact speed of 4.4 m/s moves 4.4 mm
+// a step; predictive rays find the impact on the step it happens, so it is
+// never deeper than that step's motion (under 1% of the radius: 5 mm).
+TEST(Sim, SphereBouncesToRestitutionSquaredTimesHeight) {
+  const double e = 0.8, h = 1.0, r = 0.5;
+  Simulation s(scene_from(R"({
+    "time_step": 0.001, "steps": 2000,
+    "effects": ["gravity", "contacts", "restitution", "predictive", "projected"],
+    "ground": {"restitution": 1.0},
+    "bodies": [{"sphere": 0.5, "mass": 1, "restitution": 0.8, "pose": {"position": [0, 0, 1.5]}}]
+  })"));
+  bool bounced = false;
+  double peak = 0, deepest = 0;
+  for (int i = 0; i < 2000; ++i) {
+    s.step();
+    const auto b = s.bodies()[0];
+    deepest = std::max(deepest, r - b.pose.position.z());
+    if (b.linear_velocity.z() > 0) bounced = true;
+    if (bounced) peak = std::max(peak, b.pose.position.z() - r);
+  }
+  ASSERT_TRUE(bounced);
+  EXPECT_LT(deepest, 0.01 * r);
+  EXPECT_NEAR(peak, e * e * h, 0.1 * e * e * h);
+}
+
+// A concave U dropped onto another resting on the ground: both end at rest,
+// stacked, and no pair is deeper than 2% of the U's size.
+TEST(Sim, ConcaveBodyFallsOnAnotherAndRests) {
+  Simulation s(scene_from(R"({
+    "time_step": 0.008333333333333333, "steps": 480,
+    "effects": ["gravity", "contacts", "friction", "predictive", "speculative", "projected", "interpenetration"],
+    "interpenetration": {"every": 1000},
+    "narrow_phase": {"distance_extension": 0.05, "displacement_threshold": 0.02},
+    "bodies": [
+      {"name": "lower", "mesh": "../meshes/u_shape.obj", "scale": 0.5, "pose": {"position": [0, 0, 0.3]}},
+      {"name": "upper", "mesh": "../meshes/u_shape.obj", "scale": 0.5,
+       "pose": {"position": [0.1, 0.05, 1.5], "orientation": [0.99, 0.05, 0.08, 0.1]}}
+    ]
+  })"));
+  for (int i = 0; i < 480; ++i) s.step();
+  const sim::StepRecord& last = s.last();
+  const double size = 1.5;  // the scaled U is 1.5 wide, 0.5 thick
+  ASSERT_GE(last.interpenetration, 0);
+  EXPECT_LT(last.deepest, 0.02 * size);
+  for (const PairResult& p : s.last_narrow_phase().pairs) EXPECT_LT(p.max_depth, 0.02 * size);
+  const auto bodies = s.bodies();
+  EXPECT_GT(bodies[1].pose.position.z(), bodies[0].pose.position.z() + 0.2) << "the upper U rests on the lower";
+  for (const auto& b : bodies) {
+    EXPECT_LT(b.linear_velocity.norm(), 1e-2) << b.label;
+    EXPECT_LT(b.angular_velocity.norm(), 1e-2) << b.label;
+  }
+}
+
+// A box released on a 30° slope slides d = ½ g (sin θ − μ cos θ) t² with
+// Coulomb friction μ, and ½ g sin θ t² without friction.
+TEST(Sim, FrictionOnASlopeFollowsCoulomb) {
+  const double theta = std::numbers::pi / 6, t = 1.0;
+  for (bool friction : {true, false}) {
+    const double mu = 0.3;
+    const std::string effects = friction ? R"(["gravity", "contacts", "friction", "predictive", "projected"])"
+                                         : R"(["gravity", "contacts", "predictive", "projected"])";
+    const Eigen::Vector3d n(0, -std::sin(theta), std::cos(theta));
+    const Eigen::Quaterniond tilt = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), n);
+    const Eigen::Vector3d start = n * 0.2501;
+    char json[1024];
+    std::snprintf(json, sizeof json, R"({
+      "time_step": 0.004166666666666667, "steps": 240, "effects": %s,
+      "ground": {"normal": [0, %.17g, %.17g], "friction": 1.0},
+      "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 1, "friction": %.17g,
+                  "pose": {"position": [%.17g, %.17g, %.17g], "orientation": [%.17g, %.17g, %.17g, %.17g]}}]
+    })", effects.c_str(), n.y(), n.z(), mu, start.x(), start.y(), start.z(), tilt.w(), tilt.x(), tilt.y(), tilt.z());
+    Simulation s(scene_from(json));
+    for (int i = 0; i < 240; ++i) s.step();
+    const double slid = (s.bodies()[0].pose.position - start).norm();
+    const double expected = 0.5 * kG * (std::sin(theta) - (friction ? mu * std::cos(theta) : 0.0)) * t * t;
+    EXPECT_NEAR(slid, expected, 0.1 * expected) << (friction ? "with" : "without") << " friction";
+  }
+}
+
+// A stage whose effect is not listed never runs; a listed one runs every step.
+TEST(Sim, EffectsNotListedNeverRun) {
+  const std::string bodies = R"("bodies": [{"box": [0.25, 0.25, 0.25], "pose": {"position": [0, 0, 0.3]}}])";
+  {
+    Simulation s(scene_from(R"({"steps": 20, "effects": ["gravity"], )" + bodies + "}"));
+    for (int i = 0; i < 20; ++i) s.step();
+    const sim::StageCounters& c = s.counters();
+    EXPECT_EQ(c.gravity, 20u);
+    EXPECT_EQ(c.narrow_phase, 0u);
+    EXPECT_EQ(c.friction + c.restitution + c.speculative + c.interpenetration + c.snapshots, 0u);
+    EXPECT_EQ(s.backend(), "none") << "no narrow phase is even made";
+    EXPECT_LT(s.bodies()[0].pose.position.z(), 0.0) << "without contacts it falls through the ground";
+  }
+  {
+    Simulation s(scene_from(R"({"steps": 20, "effects": ["contacts"], )" + bodies + "}"));
+    for (int i = 0; i < 20; ++i) s.step();
+    EXPECT_EQ(s.counters().gravity, 0u);
+    EXPECT_EQ(s.counters().narrow_phase, 20u);
+    EXPECT_NEAR(s.bodies()[0].pose.position.z(), 0.3, 1e-6) << "without gravity it stays put";
+  }
+  {
+    Simulation s(scene_from(R"({"steps": 20, "effects": ["gravity", "contacts", "friction", "restitution",
+        "predictive", "speculative", "projected", "interpenetration"], "interpenetration": {"every": 5}, )" + bodies + "}"));
+    for (int i = 0; i < 20; ++i) s.step();
+    const sim::StageCounters& c = s.counters();
+    EXPECT_EQ(c.friction, 20u);
+    EXPECT_EQ(c.restitution, 20u);
+    EXPECT_EQ(c.speculative, 20u);
+    EXPECT_EQ(c.interpenetration, 4u);
+  }
+}
+
+// Speculative contacts stop nothing that is not approaching: a box gliding
+// 0.02 above the ground and 0.02 past a static box's side (its corner rays
+// meet them 0.035 away, inside the 0.05 extension) keeps its velocity, while
+// the speculative points exist.
+TEST(Sim, SpeculativeContactsMakeNoGhosts) {
+  Simulation s(scene_from(R"({
+    "time_step": 0.008333333333333333, "steps": 120,
+    "effects": ["contacts", "friction", "predictive", "speculative", "projected"],
+    "narrow_phase": {"distance_extension": 0.05, "displacement_threshold": 0.02},
+    "bodies": [
+      {"box": [0.25, 0.25, 0.25], "mass": 1, "velocity": [1.5, 0, 0], "pose": {"position": [-1, 0, 0.27]}},
+      {"box": [0.25, 0.25, 0.25], "static": true, "pose": {"position": [0, 0.52, 0.27]}}
+    ]
+  })"));
+  size_t speculative = 0;
+  for (int i = 0; i < 120; ++i) {
+    speculative += s.step().speculative_points;
+    const auto b = s.bodies()[0];
+    ASSERT_NEAR(b.linear_velocity.x(), 1.5, 1e-4) << "step " << i;
+    ASSERT_NEAR(b.linear_velocity.norm(), 1.5, 1e-4) << "step " << i;
+  }
+  EXPECT_GT(speculative, 0u);
+}
+
+// Speculative contacts do stop a body that approaches: a box falling fast
+// onto the ground does not sink deeper than without them.
+TEST(Sim, SpeculativeContactsCatchAnApproach) {
+  double depth[2];
+  for (bool speculative : {false, true}) {
+    const std::string effects = speculative ? R"(["gravity", "contacts", "predictive", "speculative", "projected"])"
+                                            : R"(["gravity", "contacts", "predictive", "projected"])";
+    Simulation s(scene_from(R"({"time_step": 0.016666666666666666, "steps": 60, "effects": )" + effects + R"(,
+      "narrow_phase": {"distance_extension": 0.2, "displacement_threshold": 0.05},
+      "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 1, "velocity": [0, 0, -6], "pose": {"position": [0, 0, 0.6]}}]})"));
+    depth[speculative] = 0;
+    for (int i = 0; i < 60; ++i) {
+      s.step();
+      depth[speculative] = std::max(depth[speculative], 0.25 - s.bodies()[0].pose.position.z());
+    }
+  }
+  EXPECT_LT(depth[1], depth[0]);
+  EXPECT_LT(depth[1], 0.01);
+}
+
+void expect_scene_error(const std::string& json, const std::string& key) {
+  try {
+    scene_from(json);
+    ADD_FAILURE() << "accepted: " << json;
+  } catch (const sim::SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("inline.json"), std::string::npos) << e.what();
+  }
+}
+
+TEST(Sim, BadScenesNameTheKey) {
+  const std::string body = R"("bodies": [{"box": [1, 1, 1]}])";
+  expect_scene_error(R"({"effects": [], "colour": 1, )" + body + "}", "colour: unknown key");
+  expect_scene_error(R"({"effects": [], "time_step": "fast", )" + body + "}", "time_step: must be a number");
+  expect_scene_error(R"({"effects": [], "time_step": 0, )" + body + "}", "time_step");
+  expect_scene_error(R"({"effects": ["gravity", "wind"], )" + body + "}", "effects[1]: unknown effect \"wind\"");
+  expect_scene_error(R"({"effects": ["friction"], )" + body + "}", "\"friction\" needs \"contacts\"");
+  expect_scene_error(R"({"effects": ["contacts", "speculative"], )" + body + "}", "\"speculative\" needs \"predictive\"");
+  expect_scene_error(R"({"effects": ["contacts", "predictive"], "narrow_phase": {"predictive": true}, )" + body + "}",
+                     "narrow_phase.predictive: conflicts with effects");
+  expect_scene_error(R"({"effects": [], "bodies": [{"box": [1, 1, 1], "mass": -2}]})", "bodies[0].mass");
+  expect_scene_error(R"({"effects": [], "bodies": [{"mesh": "../meshes/nowhere.obj"}]})",
+                     "bodies[0].mesh: no such mesh file");
+  expect_scene_error(R"({"effects": [], "bodies": [{"box": [1, 1, 1], "grid": {"cells": [2, 1]}}]})",
+                     "bodies[0].grid.cells");
+  expect_scene_error(R"({"effects": [], "bodies": [{"box": [1, 1, 1], "count": 3}]})", "bodies[0].count");
+  expect_scene_error(R"({"bodies": []})", "effects: is required");
+  expect_scene_error(R"({"effects": [], )", "not valid JSON");
+}
+
+// Same scene, seed and backend: the same final state bit for bit, with one
+// thread or two, run after run; and listing `interpenetration` (its own
+// narrow phase) changes nothing.
+TEST(Sim, RunsAreBitIdenticalAcrossThreadsRepeatsAndMeasurement) {
+  const auto run = [](int threads, bool measure) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, size_t(threads));
+    const std::string effects = std::string(R"(["gravity", "contacts", "friction", "predictive", "projected")") +
+                                (measure ? R"(, "interpenetration"])" : "]");
+    Simulation s(scene_from(R"({"steps": 90, "seed": 7, "effects": )" + effects + R"(, "interpenetration": {"every": 3},
+      "narrow_phase": {"distance_extension": 0.05, "displacement_threshold": 0.02},
+      "bodies": [{"mesh": "../meshes/blob_902.obj", "scale": 0.25, "count": 12,
+                  "grid": {"cells": [3, 2, 2], "origin": [0, 0, 0.4], "spacing": [0.55, 0.55, 0.55], "jitter": 0.05,
+                           "random_orientation": true}}]})"));
+    for (int i = 0; i < 90; ++i) s.step();
+    return s.state_hash();
+  };
+  const uint64_t reference = run(1, false);
+  EXPECT_EQ(run(2, false), reference);
+  EXPECT_EQ(run(2, false), reference);
+  EXPECT_EQ(run(1, true), reference);
+}
+
+// Bodies emitted over time appear at the rate asked, on the emitter's circle.
+TEST(Sim, EmitterAddsBodiesAtItsRate) {
+  Simulation s(scene_from(R"({"time_step": 0.01, "steps": 100, "effects": ["gravity", "contacts", "predictive"],
+    "bodies": [{"sphere": 0.1, "count": 5, "emitter": {"rate": 10, "centre": [0, 0, 2], "radius": 1, "angular_speed": 1}}]})"));
+  for (int i = 0; i < 100; ++i) s.step();
+  const auto bodies = s.bodies();
+  ASSERT_EQ(bodies.size(), 5u);
+  for (const auto& b : bodies) EXPECT_LT(b.pose.position.z(), 2.0);
+  EXPECT_EQ(s.last().bodies, 6u) << "five spheres and the ground";
+}
+
+}  // namespace
+}  // namespace rtcd::test
