@@ -7,7 +7,7 @@ packages=(
   libeigen3-dev libtbb-dev libembree-dev libassimp-dev libtinyobjloader-dev
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
-  libfcl-dev libccd-dev libbullet-dev python3-matplotlib
+  libfcl-dev libccd-dev libbullet-dev libstb-dev python3-matplotlib
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -257,3 +257,40 @@ TEST(Sim, EmitterAddsBodiesAtItsRate) {
 
 }  // namespace
 }  // namespace rtcd::test
+
+namespace rtcd::test {
+namespace {
+
+int run_cli(const std::string& args) {
+  const int status = std::system((std::string(RTCD_CLI) + " " + args + " > /dev/null 2>&1").c_str());
+  return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+// `rtcd run` leaves the CSV, the JSON, the plots and the snapshots.
+TEST(SimCli, RunLeavesItsOutputs) {
+  const std::filesystem::path out = std::filesystem::temp_directory_path() / "rtcd_run_test";
+  std::filesystem::remove_all(out);
+  ASSERT_EQ(run_cli(std::string("run ") + RTCD_DATA_DIR + "/scenes/default.json --steps 12 --out " + out.string()), 0);
+  for (const char* file : {"steps.csv", "summary.json", "time_per_step.png", "pairs_and_rays.png",
+                           "interpenetration.png", "snapshot_0.png", "snapshot_11.png"})
+    EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
+  std::ifstream csv(out / "steps.csv");
+  size_t lines = 0;
+  for (std::string line; std::getline(csv, line);) ++lines;
+  EXPECT_EQ(lines, 13u) << "a header and a line per step";
+}
+
+// Every committed scene loads; bad scenes exit 2.
+TEST(SimCli, CommittedScenesLoadAndBadScenesExit2) {
+  for (const auto& entry : std::filesystem::directory_iterator(std::string(RTCD_DATA_DIR) + "/scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    EXPECT_NO_THROW(sim::load_scene(entry.path().string())) << entry.path();
+  }
+  const std::filesystem::path bad = std::filesystem::temp_directory_path() / "rtcd_bad_scene.json";
+  std::ofstream(bad) << R"({"effects": ["gravity"], "time_step": 0, "bodies": []})";
+  EXPECT_EQ(run_cli("run " + bad.string() + " --out /tmp/rtcd_bad_run"), 2);
+  EXPECT_EQ(run_cli("run /nonexistent/scene.json"), 2);
+}
+
+}  // namespace
+}  // namespace rtcd::test
