@@ -278,9 +278,19 @@ def pose_sequence_seeds():
     return {k: v.encode() for k, v in text.items()}
 
 
+def scene_seeds():
+    """The committed scenes and the inline scenes of tests/sim/sim_test.cpp."""
+    import re
+    seeds = {p.name: p.read_bytes() for p in sorted((HERE.parent / "data" / "scenes").glob("*.json"))}
+    tests = (HERE.parent / "tests" / "sim" / "sim_test.cpp").read_text()
+    for n, m in enumerate(re.finditer(r'scene_from\(R"\((\{.*?\})\)"\)', tests, re.S), 1):
+        seeds[f"test_{n}.json"] = m.group(1).encode()
+    return seeds
+
+
 def main():
     for harness, seeds in (("mesh_pair", mesh_pair_seeds()), ("mesh_file", mesh_file_seeds()),
-                           ("pose_sequence", pose_sequence_seeds())):
+                           ("pose_sequence", pose_sequence_seeds()), ("scene", scene_seeds())):
         folder = CORPUS / harness
         folder.mkdir(parents=True, exist_ok=True)
         for old in folder.iterdir():

@@ -1,0 +1,69 @@
+// libFuzzer harness: scene files through the scene loader, then a few steps
+// of the simulation. File access is stubbed (every mesh path "exists" and is
+// simulated as a box of its scale), bodies and steps are capped, pictures are
+// tiny. SceneError is the accepted rejection; rtcd::Error (a size or config
+// out of range) and SimulationError (a blow-up, named) are accepted ends. A
+// stage whose effect is not listed must never run, and every pose after a
+// step must be finite.
+#include <cmath>
+#include <cstdint>
+#include <string>
+
+#include "invariants.hpp"
+#include "rtcd/error.hpp"
+#include "rtcd/sim/simulation.hpp"
+
+namespace {
+
+using rtcd::fuzz::require;
+using rtcd::sim::Effect;
+
+void run(rtcd::sim::Scene scene) {
+  for (auto& b : scene.bodies) {
+    if (!b.mesh.empty()) {
+      b.mesh.clear();
+      b.box = Eigen::Vector3d::Constant(0.5 * b.scale);
+    }
+  }
+  scene.steps = std::min<uint64_t>(scene.steps, 4);
+  scene.snapshot_width = std::min(scene.snapshot_width, 32);
+  scene.snapshot_height = std::min(scene.snapshot_height, 32);
+  rtcd::sim::Simulation sim(scene, "basic");
+  for (uint64_t i = 0; i < scene.steps; ++i) {
+    sim.step();
+    for (const auto& b : sim.bodies()) require(b.pose.position.allFinite() && b.pose.orientation.coeffs().allFinite(), "non-finite pose after a step");
+    if (scene.has(Effect::snapshots) && i == 0) {
+      const rtcd::sim::Image image = sim.snapshot(scene.snapshot_width, scene.snapshot_height);
+      require(image.rgb.size() == size_t(3 * image.width * image.height), "snapshot size");
+    }
+  }
+  const auto& c = sim.counters();
+  require(scene.has(Effect::gravity) || c.gravity == 0, "gravity ran unlisted");
+  require(scene.has(Effect::contacts) || c.narrow_phase == 0, "narrow phase ran without contacts");
+  require(scene.has(Effect::friction) || c.friction == 0, "friction ran unlisted");
+  require(scene.has(Effect::restitution) || c.restitution == 0, "restitution ran unlisted");
+  require(scene.has(Effect::speculative) || c.speculative == 0, "speculative ran unlisted");
+  require(scene.has(Effect::interpenetration) || c.interpenetration == 0, "interpenetration ran unlisted");
+  require(c.steps == scene.steps, "steps miscounted");
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
+  rtcd::sim::SceneLimits limits;
+  limits.max_bodies = 16;
+  limits.max_steps = 1'000'000;
+  limits.file_exists = [](const std::string&) { return true; };
+  rtcd::sim::Scene scene;
+  try {
+    scene = rtcd::sim::parse_scene(std::string(reinterpret_cast<const char*>(data), size), "fuzz.json", limits);
+  } catch (const rtcd::sim::SceneError&) {
+    return 0;
+  }
+  try {
+    run(std::move(scene));
+  } catch (const rtcd::sim::SimulationError&) {
+  } catch (const rtcd::Error&) {
+  }
+  return 0;
+}
