@@ -239,7 +239,7 @@ Scene parse_scene(std::string_view json_text, const std::string& path, const Sce
   Json json;
   try {
     json = Json::parse(json_text);
-  } catch (const Json::parse_error& e) {
+  } catch (const Json::exception& e) {  // a syntax error, or a number beyond a double
     throw SceneError(path + ": not valid JSON: " + e.what());
   }
   Object root(json, "", path);

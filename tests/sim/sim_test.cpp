@@ -220,6 +220,7 @@ TEST(Sim, BadScenesNameTheKey) {
   expect_scene_error(R"({"effects": [], "bodies": [{"box": [1, 1, 1], "count": 3}]})", "bodies[0].count");
   expect_scene_error(R"({"bodies": []})", "effects: is required");
   expect_scene_error(R"({"effects": [], )", "not valid JSON");
+  expect_scene_error(R"({"effects": [], "time_step": 1e400, )" + body + "}", "not valid JSON");  // found by fuzz/scene.cpp
 }
 
 // Same scene, seed and backend: the same final state bit for bit, with one
