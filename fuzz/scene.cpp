@@ -24,6 +24,7 @@ void run(rtcd::sim::Scene scene) {
       b.mesh.clear();
       b.box = Eigen::Vector3d::Constant(0.5 * b.scale);
     }
+    if (b.blob) b.blob->triangles = std::min<uint32_t>(b.blob->triangles, 200);  // keep each input fast
   }
   scene.steps = std::min<uint64_t>(scene.steps, 4);
   scene.snapshot_width = std::min(scene.snapshot_width, 32);

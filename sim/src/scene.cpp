@@ -152,6 +152,17 @@ BodySpec read_body(Object o, size_t index, const std::string& folder, const Scen
     b.scale = o.number("scale", 1.0, 1e-6, 1e6);
     b.weld = o.boolean("weld", false);
   }
+  if (o.has("blob")) {
+    ++shapes;
+    Object g = o.object("blob");
+    BodySpec::Blob blob;
+    blob.triangles = uint32_t(g.integer("triangles", blob.triangles, 8, 2'000'000));
+    if (blob.triangles % 2) g.fail(g.key("triangles"), "must be even");
+    blob.seed = uint32_t(g.integer("seed", blob.seed, 0, UINT32_MAX));
+    blob.radius = g.number("radius", 1.0, 1e-6, 1e6);
+    g.finish();
+    b.blob = blob;
+  }
   if (o.has("sphere")) {
     ++shapes;
     b.sphere = o.positive("sphere", 1e6);
@@ -161,7 +172,7 @@ BodySpec read_body(Object o, size_t index, const std::string& folder, const Scen
     b.box = o.vector("box", Eigen::Vector3d::Ones(), 1e6);
     if ((b.box->array() <= 0).any()) o.fail(o.key("box"), "half extents must be > 0");
   }
-  if (shapes != 1) o.fail(o.where(), shapes ? "names more than one shape (mesh, sphere, box)" : "needs a shape: mesh, sphere or box");
+  if (shapes != 1) o.fail(o.where(), shapes ? "names more than one shape (mesh, blob, sphere, box)" : "needs a shape: mesh, blob, sphere or box");
 
   b.count = uint32_t(o.integer("count", 1, 1, limits.max_bodies));
   b.is_static = o.boolean("static", false);

@@ -209,6 +209,10 @@ void Simulation::Impl::make_kinds() {
       if (std::string w = self_intersection_warning(mesh, spec.mesh); !w.empty()) warnings.push_back(w);
       k.render = render_mesh(mesh);
       k.shape = std::make_shared<Shape>(std::move(mesh));
+    } else if (spec.blob) {
+      Mesh mesh = gen::concave_blob(int(spec.blob->triangles), spec.blob->seed, spec.blob->radius);
+      k.render = render_mesh(mesh);
+      k.shape = std::make_shared<Shape>(std::move(mesh));
     } else if (spec.sphere) {
       k.shape = std::make_shared<Shape>(Sphere{*spec.sphere});
       k.render = render_mesh(gen::icosphere(*spec.sphere, 3));

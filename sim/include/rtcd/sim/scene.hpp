@@ -44,10 +44,16 @@ std::optional<Effect> parse_effect(std::string_view name);
 struct BodySpec {
   std::string label;  // "bodies[i]" or its "name"
   // Exactly one shape: a mesh file (resolved against the scene's folder), a
-  // sphere radius or box half extents.
+  // generated concave blob, a sphere radius or box half extents.
   std::string mesh;
   double scale = 1.0;
   bool weld = false;
+  struct Blob {
+    uint32_t triangles = 902;  // even, 8 .. 2,000,000
+    uint32_t seed = 1;
+    double radius = 1.0;
+  };
+  std::optional<Blob> blob;
   std::optional<double> sphere;
   std::optional<Eigen::Vector3d> box;
 
