@@ -394,7 +394,6 @@ const StepRecord& Simulation::step() {
 
   m.world->broad = m.world->narrow = m.world->solver = 0;
   m.world->stepSimulation(btScalar(m.scene.time_step), 0, btScalar(m.scene.time_step));
-  ++m.counters.steps;
 
   // A body that blew up stops the run, named.
   for (const Body& b : m.bodies) {
@@ -404,6 +403,7 @@ const StepRecord& Simulation::step() {
     if (!std::isfinite(o.x() + o.y() + o.z() + q.x() + q.y() + q.z() + q.w()))
       throw SimulationError("step " + std::to_string(index) + ": body " + b.label + " has a non-finite pose");
   }
+  ++m.counters.steps;
 
   r.bodies = m.bodies.size();
   r.seconds_broad = m.world->broad;

@@ -282,6 +282,31 @@ TEST(SimCli, RunLeavesItsOutputs) {
   EXPECT_EQ(lines, 13u) << "a header and a line per step";
 }
 
+// A simulation that blows up stops naming the step and the body, exits 1
+// and keeps what it wrote. (A mass of 1e-40 kg has an infinite inverse in
+// Bullet's single precision: its first step is NaN.)
+TEST(SimCli, BlowUpStopsNamingStepAndBody) {
+  const std::string json = R"({"steps": 10, "effects": ["gravity", "contacts"],
+    "bodies": [{"name": "feather", "box": [0.1, 0.1, 0.1], "mass": 1e-40, "pose": {"position": [0, 0, 1]}}]})";
+  Simulation s(scene_from(json));
+  try {
+    s.step();
+    ADD_FAILURE() << "no blow-up";
+  } catch (const sim::SimulationError& e) {
+    EXPECT_STREQ(e.what(), "step 0: body feather has a non-finite pose");
+  }
+  EXPECT_EQ(s.steps_done(), 0u);
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "rtcd_blow_up";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  std::ofstream(dir / "scene.json") << json;
+  EXPECT_EQ(run_cli("run " + (dir / "scene.json").string() + " --no-plots --out " + (dir / "run").string()), 1);
+  EXPECT_TRUE(std::filesystem::exists(dir / "run" / "steps.csv"));
+  std::ifstream summary(dir / "run" / "summary.json");
+  const std::string text((std::istreambuf_iterator<char>(summary)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("step 0: body feather has a non-finite pose"), std::string::npos);
+}
+
 // Every committed scene runs; bad scenes exit 2.
 TEST(SimCli, CommittedScenesRunAndBadScenesExit2) {
   const std::filesystem::path out = std::filesystem::temp_directory_path() / "rtcd_scene_runs";
