@@ -90,6 +90,44 @@ TEST(Sim, ConcaveBodyFallsOnAnotherAndRests) {
   }
 }
 
+// Predictive rays (thesis 2.1.3): a vertex about to penetrate is tracked, so
+// the penetration is found on the next narrow phase after it happens, not at
+// the pair's next full step. A box sinks at 0.01 per step into the ground;
+// with displacement_threshold 0.2 its pair stays iterative for 20 steps.
+TEST(Sim, PredictiveRaysFindAPenetrationOnTheStepItHappens) {
+  for (bool predictive : {true, false}) {
+    const std::string effects = predictive ? R"(["contacts", "predictive", "projected"])" : R"(["contacts", "projected"])";
+    Simulation s(scene_from(R"({"time_step": 0.016666666666666666, "steps": 40, "effects": )" + effects + R"(,
+      "narrow_phase": {"distance_extension": 0.2, "displacement_threshold": 0.2},
+      "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 1, "velocity": [0, 0, -0.6], "pose": {"position": [0, 0, 0.345]}}]})"));
+    int penetrated = -1, found = -1;
+    for (int i = 0; i < 40 && found < 0; ++i) {
+      if (s.step().contacts > 0) found = i;
+      if (penetrated < 0 && s.bodies()[0].pose.position.z() < 0.25) penetrated = i;
+    }
+    ASSERT_GE(penetrated, 0);
+    if (predictive)
+      EXPECT_EQ(found, penetrated + 1) << "seen by the step after the one that moved it in";
+    else
+      EXPECT_GT(found, penetrated + 5) << "found only at the next full step";
+  }
+}
+
+// Bullet's sleeping skips the pairs of resting bodies; a scene says whether
+// it may (the thesis experiments run without).
+TEST(Sim, SleepingIsTheScenesChoice) {
+  for (bool sleeping : {true, false}) {
+    Simulation s(scene_from(std::string(R"({"time_step": 0.008333333333333333, "steps": 480, "sleeping": )") +
+                            (sleeping ? "true" : "false") + R"(,
+      "effects": ["gravity", "contacts", "friction", "predictive", "speculative", "projected"],
+      "narrow_phase": {"distance_extension": 0.05, "displacement_threshold": 0.02},
+      "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 1, "pose": {"position": [0, 0, 0.26]}}]})"));
+    for (int i = 0; i < 480; ++i) s.step();
+    EXPECT_EQ(s.last().pairs, sleeping ? 0u : 1u) << (sleeping ? "asleep" : "awake");
+    EXPECT_NEAR(s.bodies()[0].pose.position.z(), 0.25, 2e-3);
+  }
+}
+
 // A box released on a 30° slope slides d = ½ g (sin θ − μ cos θ) t² with
 // Coulomb friction μ, and ½ g sin θ t² without friction.
 TEST(Sim, FrictionOnASlopeFollowsCoulomb) {
