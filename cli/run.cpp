@@ -214,6 +214,12 @@ int run_scene(const RunOptions& o) {
         {"snapshots", c.snapshots}}},
       {"snapshots", pictures},
   };
+  if (std::ifstream file(scene.path); file) {
+    try {
+      summary["scene"]["definition"] = nlohmann::json::parse(file);  // the file as run
+    } catch (const nlohmann::json::exception&) {
+    }
+  }
   if (rss_at_1000 >= 0) summary["totals"]["peak_rss_mib_at_1000_steps"] = rss_at_1000;
   if (last.interpenetration >= 0)
     summary["totals"]["final_interpenetration"] = {
