@@ -41,10 +41,10 @@ int main(int argc, char** argv) {
   // its principal frame, so the link says where the mesh sits in it.
   const rtcd::sim::MassProperties mass = rtcd::sim::mass_properties(*mesh, 500.0);
   const rtcd::Pose principal = mass.principal_frame();
-  const rtcd::Aabb b = mesh->bounds();
-  const btVector3 half(btScalar(0.5 * (b.max - b.min).norm()), btScalar(0.5 * (b.max - b.min).norm()),
-                       btScalar(0.5 * (b.max - b.min).norm()));
-  btBoxShape bounds(half);  // the broad phase's box, generous around any rotation
+  // The broad phase's box: every vertex is within this reach of the centre
+  // of mass, whatever the rotation.
+  const btScalar reach = btScalar(mesh->radius() + mass.centre_of_mass.norm());
+  btBoxShape bounds(btVector3(reach, reach, reach));
   const btVector3 inertia(btScalar(mass.principal_moments.x()), btScalar(mass.principal_moments.y()),
                           btScalar(mass.principal_moments.z()));
   btRigidBody::btRigidBodyConstructionInfo info(btScalar(mass.mass), nullptr, &bounds, inertia);

@@ -16,52 +16,16 @@
 #include "rtcd/sim/dispatcher.hpp"
 
 #include <algorithm>
-#include <chrono>
+#include <limits>
+#include <utility>
 
+#include "bullet_math.hpp"
 #include "rtcd/error.hpp"
 
 namespace rtcd::sim {
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-btVector3 bt(const Eigen::Vector3d& v) { return {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())}; }
-Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
-
 uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
-
-// A contact or speculative point before it is written, in world coordinates.
-struct Candidate {
-  Eigen::Vector3d on_a, on_b, normal_on_b;  // Bullet's convention: normal on B points toward A
-  double distance;                           // < 0 penetrating, > 0 a speculative gap
-  int side;
-  uint32_t vertex;
-};
-
-// The deepest (or, for gaps, the nearest) first, then each next the one
-// farthest from those chosen. Deterministic: ties go to the earlier index.
-void choose_spread(const std::vector<Candidate>& c, size_t budget, std::vector<size_t>& chosen) {
-  if (c.empty() || budget == 0) return;
-  size_t first = 0;
-  for (size_t i = 1; i < c.size(); ++i)
-    if (c[i].distance < c[first].distance) first = i;
-  std::vector<double> gap(c.size(), std::numeric_limits<double>::infinity());
-  for (size_t pick = first, n = 0;;) {
-    chosen.push_back(pick);
-    gap[pick] = -1.0;
-    if (++n == std::min(budget, c.size())) break;
-    size_t far = 0;
-    double best = -1.0;
-    for (size_t i = 0; i < c.size(); ++i) {
-      if (gap[i] < 0) continue;
-      gap[i] = std::min(gap[i], (c[i].on_a - c[pick].on_a).squaredNorm());
-      if (gap[i] > best) best = gap[i], far = i;
-    }
-    pick = far;
-  }
-}
 
 }  // namespace
 
@@ -104,15 +68,38 @@ const BatchDispatcher::Slot* BatchDispatcher::slot_of(const btCollisionObject* o
   return &slots_[i];
 }
 
+BatchDispatcher::Slot* BatchDispatcher::slot_of(const btCollisionObject* object) {
+  return const_cast<Slot*>(std::as_const(*this).slot_of(object));
+}
+
+// The deepest (or, for gaps, the nearest) first, then each next the one
+// farthest from those chosen. Deterministic: ties go to the earlier index.
+void BatchDispatcher::choose_spread(const std::vector<Candidate>& c, size_t budget, std::vector<size_t>& chosen) {
+  chosen.clear();
+  if (c.empty() || budget == 0) return;
+  size_t first = 0;
+  for (size_t i = 1; i < c.size(); ++i)
+    if (c[i].distance < c[first].distance) first = i;
+  spread_.assign(c.size(), std::numeric_limits<double>::infinity());  // squared distance to the chosen set
+  for (size_t pick = first;;) {
+    chosen.push_back(pick);
+    spread_[pick] = -1.0;
+    if (chosen.size() == std::min(budget, c.size())) break;
+    size_t far = 0;
+    double best = -1.0;
+    for (size_t i = 0; i < c.size(); ++i) {
+      if (spread_[i] < 0) continue;
+      spread_[i] = std::min(spread_[i], (c[i].on_a - c[pick].on_a).squaredNorm());
+      if (spread_[i] > best) best = spread_[i], far = i;
+    }
+    pick = far;
+  }
+}
+
 Pose BatchDispatcher::shape_pose(const btCollisionObject* object) const {
   const Slot* slot = slot_of(object);
   if (!slot) throw UsageError("shape_pose: the object is not linked");
-  const btTransform& t = object->getWorldTransform();
-  const btQuaternion q = t.getRotation();
-  Pose body;
-  body.position = eigen(t.getOrigin());
-  body.orientation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized();
-  return body * slot->link.shape_in_body;
+  return pose_of(object->getWorldTransform()) * slot->link.shape_in_body;
 }
 
 void BatchDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairs, const btDispatcherInfo& info,
@@ -141,8 +128,12 @@ void BatchDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairs, c
     batch_objects_.push_back({o0, o1});
   }
   for (const auto& [o0, o1] : batch_objects_) {
-    narrow_.set_pose(slot_of(o0)->link.id, shape_pose(o0));
-    narrow_.set_pose(slot_of(o1)->link.id, shape_pose(o1));
+    for (btCollisionObject* o : {o0, o1}) {
+      Slot& slot = *slot_of(o);
+      if (slot.posed == batch_.calls) continue;  // a body in many pairs is posed once
+      slot.posed = batch_.calls;
+      narrow_.set_pose(slot.link.id, shape_pose(o));
+    }
   }
   auto t1 = Clock::now();
   narrow_.detect(batch_pairs_, result_);
@@ -166,15 +157,16 @@ void BatchDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairs, c
 }
 
 void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btCollisionObject* b, PairManifolds& held) {
-  std::vector<Candidate> touching, gaps;
+  touching_.clear();
+  gaps_.clear();
   for (const Contact& c : result_.contacts_of(pair)) {
     const double depth = c.push.norm();
     if (!(depth > 0)) continue;
     const Eigen::Vector3d out = c.push / depth;  // moves the source vertex out of the target
     if (c.source == Side::a)
-      touching.push_back({c.origin, c.origin + c.push, out, -depth, 0, c.vertex});
+      touching_.push_back({c.origin, c.origin + c.push, out, -depth, 0, c.vertex});
     else
-      touching.push_back({c.origin + c.push, c.origin, -out, -depth, 1, c.vertex});
+      touching_.push_back({c.origin + c.push, c.origin, -out, -depth, 1, c.vertex});
   }
   if (options_.speculative) {
     for (const PredictiveRay& r : result_.predictive_of(pair)) {
@@ -183,21 +175,20 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
       const double gap = r.distance * std::abs(r.direction.dot(r.normal));
       const Eigen::Vector3d on_target = r.origin - gap * r.normal;
       if (r.source == Side::a)
-        gaps.push_back({r.origin, on_target, r.normal, gap, 0, r.vertex});
+        gaps_.push_back({r.origin, on_target, r.normal, gap, 0, r.vertex});
       else
-        gaps.push_back({on_target, r.origin, -r.normal, gap, 1, r.vertex});
+        gaps_.push_back({on_target, r.origin, -r.normal, gap, 1, r.vertex});
     }
   }
-  std::vector<size_t> chosen_touching, chosen_gaps;
-  choose_spread(touching, options_.points_per_pair, chosen_touching);
-  choose_spread(gaps, options_.points_per_pair - chosen_touching.size(), chosen_gaps);
+  choose_spread(touching_, options_.points_per_pair, chosen_touching_);
+  choose_spread(gaps_, options_.points_per_pair - chosen_touching_.size(), chosen_gaps_);
 
   // Last step's points, for warm starting, keyed by their ray.
-  std::vector<btManifoldPoint> previous;
+  previous_.clear();
   for (btPersistentManifold* m : held.manifolds)
-    for (int i = 0; i < m->getNumContacts(); ++i) previous.push_back(m->getContactPoint(i));
+    for (int i = 0; i < m->getNumContacts(); ++i) previous_.push_back(m->getContactPoint(i));
 
-  const size_t count = chosen_touching.size() + chosen_gaps.size();
+  const size_t count = chosen_touching_.size() + chosen_gaps_.size();
   const size_t needed = (count + MANIFOLD_CACHE_SIZE - 1) / MANIFOLD_CACHE_SIZE;
   while (held.manifolds.size() > needed) {
     releaseManifold(held.manifolds.back());
@@ -214,8 +205,16 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
 
   const BodyLink& la = slot_of(a)->link;
   const BodyLink& lb = slot_of(b)->link;
-  const btScalar friction = options_.friction ? btScalar(la.friction * lb.friction) : btScalar(0);
-  const btScalar restitution = options_.restitution ? btScalar(la.restitution * lb.restitution) : btScalar(0);
+  btScalar friction = 0, restitution = 0;
+  if (count > 0 && options_.friction) {
+    friction = btScalar(la.friction * lb.friction);
+    batch_.friction = true;
+  }
+  if (!chosen_touching_.empty() && options_.restitution) {
+    restitution = btScalar(la.restitution * lb.restitution);
+    batch_.restitution = true;
+  }
+  batch_.speculative = batch_.speculative || !chosen_gaps_.empty();
   size_t written = 0;
   const auto write = [&](const Candidate& c) {
     const btVector3 pa = bt(c.on_a), pb = bt(c.on_b);
@@ -228,7 +227,7 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
     pt.m_combinedRestitution = c.distance < 0 ? restitution : btScalar(0);
     pt.m_partId0 = c.side;
     pt.m_index0 = int(c.vertex);
-    for (const btManifoldPoint& old : previous) {
+    for (const btManifoldPoint& old : previous_) {
       if (old.m_partId0 == c.side && old.m_index0 == int(c.vertex)) {
         pt.m_appliedImpulse = old.m_appliedImpulse;
         pt.m_appliedImpulseLateral1 = old.m_appliedImpulseLateral1;
@@ -241,10 +240,10 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
     held.manifolds[written / MANIFOLD_CACHE_SIZE]->addManifoldPoint(pt, /*isPredictive=*/true);
     ++written;
   };
-  for (size_t i : chosen_touching) write(touching[i]);
-  for (size_t i : chosen_gaps) write(gaps[i]);
+  for (size_t i : chosen_touching_) write(touching_[i]);
+  for (size_t i : chosen_gaps_) write(gaps_[i]);
   batch_.points += written;
-  batch_.speculative_points += chosen_gaps.size();
+  batch_.speculative_points += chosen_gaps_.size();
 }
 
 void BatchDispatcher::release(PairManifolds& held) {

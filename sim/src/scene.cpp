@@ -217,10 +217,8 @@ BodySpec read_body(Object o, size_t index, const std::string& folder, const Scen
     e.finish();
     if (b.is_static) e.fail(e.key("rate"), "a static body cannot be emitted");
     b.emitter = em;
-  } else if (b.count > 1 && !o.has("pose")) {
-    o.fail(o.key("count"), "is " + std::to_string(b.count) + ": more than one body needs a grid or an emitter");
   } else if (b.count > 1) {
-    o.fail(o.key("count"), "more than one body cannot share one pose: use a grid or an emitter");
+    o.fail(o.key("count"), "is " + std::to_string(b.count) + ": more than one body needs a grid or an emitter");
   }
   o.finish();
   return b;

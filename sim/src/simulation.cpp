@@ -2,7 +2,6 @@
 // dispatcher, stages assembled from the scene's effects.
 #include "rtcd/sim/simulation.hpp"
 
-#include <chrono>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -12,28 +11,12 @@
 
 #include "rtcd/mesh_check.hpp"
 #include "rtcd/mesh_gen.hpp"
+#include "bullet_math.hpp"
 #include "rtcd/sim/dispatcher.hpp"
 #include "rtcd/sim/mass.hpp"
 
 namespace rtcd::sim {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
-
-btVector3 bt(const Eigen::Vector3d& v) { return {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())}; }
-Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }
-btTransform bt(const Pose& p) {
-  const Eigen::Quaterniond& q = p.orientation;
-  return btTransform(btQuaternion(btScalar(q.x()), btScalar(q.y()), btScalar(q.z()), btScalar(q.w())), bt(p.position));
-}
-Pose pose_of(const btTransform& t) {
-  const btQuaternion q = t.getRotation();
-  Pose p;
-  p.position = eigen(t.getOrigin());
-  p.orientation = Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized();
-  return p;
-}
 
 // A dispatcher for scenes without `contacts`: the broad phase still runs,
 // nothing answers its pairs.
@@ -268,6 +251,7 @@ void Simulation::Impl::add_ground() {
   Body b;
   b.rigid = std::make_unique<btRigidBody>(info);
   b.id = register_shape_body(id, probe_id, pose);
+  b.rigid->setUserIndex(int(b.id));  // the interpenetration pass reads ids back from the broad phase
   b.spec = SIZE_MAX;
   b.label = "ground";
   world->addRigidBody(b.rigid.get());
@@ -288,6 +272,7 @@ void Simulation::Impl::add_body(size_t spec_index, const Pose& shape_pose, const
   Body b;
   b.rigid = std::make_unique<btRigidBody>(info);
   b.id = register_shape_body(k.id, k.probe_id, shape_pose);
+  b.rigid->setUserIndex(int(b.id));
   b.spec = spec_index;
   b.label = label;
   if (!spec.is_static) {
@@ -363,10 +348,7 @@ void Simulation::Impl::measure() {
   ++counters.interpenetration;
 }
 
-Simulation::Simulation(const Scene& scene, const std::string& backend) : impl_(std::make_unique<Impl>(scene, backend)) {
-  // The probe reads body ids back from the rigid bodies.
-  for (const Body& b : impl_->bodies) b.rigid->setUserIndex(int(b.id));
-}
+Simulation::Simulation(const Scene& scene, const std::string& backend) : impl_(std::make_unique<Impl>(scene, backend)) {}
 
 Simulation::~Simulation() = default;
 
@@ -381,9 +363,7 @@ const StepRecord& Simulation::step() {
 
   double effects = 0;
   auto t = Clock::now();
-  const size_t before = m.bodies.size();
   m.emit(double(index) * m.scene.time_step);
-  for (size_t i = before; i < m.bodies.size(); ++i) m.bodies[i].rigid->setUserIndex(int(m.bodies[i].id));
   if (m.scene.has(Effect::gravity)) {
     const btVector3 g = bt(m.scene.gravity);
     for (Body& b : m.bodies)
@@ -413,9 +393,9 @@ const StepRecord& Simulation::step() {
     ++m.counters.narrow_phase;
     const auto& batch = m.batch->last_batch();
     const StepResult& n = m.batch->last_step();
-    if (m.scene.has(Effect::friction)) ++m.counters.friction;
-    if (m.scene.has(Effect::restitution)) ++m.counters.restitution;
-    if (m.scene.has(Effect::speculative)) ++m.counters.speculative;
+    m.counters.friction += batch.friction;
+    m.counters.restitution += batch.restitution;
+    m.counters.speculative += batch.speculative;
     r.pairs = batch.pairs;
     r.pairs_full = n.stats.pairs_full;
     r.pairs_iterative = n.stats.pairs_iterative;

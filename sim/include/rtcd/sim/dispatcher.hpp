@@ -52,6 +52,9 @@ class BatchDispatcher : public btCollisionDispatcher {
   struct Batch {
     uint64_t calls = 0;  // batches run so far
     size_t pairs = 0, points = 0, speculative_points = 0, warm_started = 0;
+    // Which optional stages ran in this batch (their options are on and
+    // there were points to give them to).
+    bool friction = false, restitution = false, speculative = false;
     double seconds_narrow = 0, seconds_manifolds = 0;
   };
   const Batch& last_batch() const { return batch_; }
@@ -62,12 +65,22 @@ class BatchDispatcher : public btCollisionDispatcher {
   struct Slot {
     btCollisionObject* object = nullptr;
     BodyLink link;
+    uint64_t posed = 0;  // the batch that last set its pose
+  };
+  // A contact or speculative point before it is written, in world coordinates.
+  struct Candidate {
+    Eigen::Vector3d on_a, on_b, normal_on_b;  // Bullet's convention: normal on B points toward A
+    double distance;                           // < 0 penetrating, > 0 a speculative gap
+    int side;
+    uint32_t vertex;
   };
   struct PairManifolds {
     std::vector<btPersistentManifold*> manifolds;
     uint64_t seen = 0;  // the batch that last saw this pair
   };
+  Slot* slot_of(const btCollisionObject* object);
   const Slot* slot_of(const btCollisionObject* object) const;
+  void choose_spread(const std::vector<Candidate>& candidates, size_t budget, std::vector<size_t>& chosen);
   void fill(const PairResult& pair, btCollisionObject* a, btCollisionObject* b, PairManifolds& held);
   void release(PairManifolds& held);
 
@@ -79,6 +92,11 @@ class BatchDispatcher : public btCollisionDispatcher {
   std::vector<std::pair<btCollisionObject*, btCollisionObject*>> batch_objects_;
   StepResult result_;
   Batch batch_;
+  // Scratch kept across pairs and steps, so a steady step allocates nothing.
+  std::vector<Candidate> touching_, gaps_;
+  std::vector<size_t> chosen_touching_, chosen_gaps_;
+  std::vector<double> spread_;
+  std::vector<btManifoldPoint> previous_;
 };
 
 }  // namespace rtcd::sim

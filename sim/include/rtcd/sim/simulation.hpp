@@ -20,6 +20,8 @@ class SimulationError : public Error {
 };
 
 // How often each stage ran: a stage whose effect is not listed stays at 0.
+// friction, restitution and speculative count the batches that gave them
+// points (a step without contacts has nothing to give friction to).
 struct StageCounters {
   uint64_t steps = 0, gravity = 0, narrow_phase = 0, friction = 0, restitution = 0, speculative = 0,
            interpenetration = 0, snapshots = 0;
