@@ -162,8 +162,8 @@ Simulation::Impl::Impl(const Scene& s, const std::string& backend_override) : sc
   // Bullet corrects penetrations shallower than this threshold (default
   // -0.04) by adding velocity (Baumgarte), which adds energy: a sphere with
   // restitution 0.8 left the ground at 4.41 m/s after hitting it at 4.43 m/s.
-  // At 0 every correction is
-  // split from the velocity, so bounces and rest keep their energy.
+  // At 0 every correction is split from the velocity, so bounces and rest
+  // keep their energy.
   world->getSolverInfo().m_splitImpulse = true;
   world->getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
   make_kinds();
