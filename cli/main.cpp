@@ -6,6 +6,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bench.hpp"
 #include "check.hpp"
 #include "inputs.hpp"
 #include "report.hpp"
@@ -143,9 +144,27 @@ int main(int argc, char** argv) {
   run->add_option("--out", r.out, "Output folder (default: runs/<scene>-<timestamp>/)");
   run->add_flag("--no-plots", r.no_plots, "Skip the PNG plots");
 
+  rtcd::cli::BenchOptions bo;
+  auto* bench = app.add_subcommand(
+      "bench", "The thesis' experiments on a scene: record, replay through rtcd, GIMPACT and FCL, tables and plots");
+  bench->add_option("SCENE", bo.scene, "avalanche, stream, their _small versions, or a scene file");
+  bench->add_option("--replay", bo.replay, "Replay this recording (recording.rtcdrec of an earlier bench) instead");
+  bench->add_option("--out", bo.out, "Output folder (default: runs/bench-<scene>/)");
+  bench->add_option("--full-every", bo.full_every, "Replay full tracing on every k-th step (default: steps / 600)");
+  bench->add_option("--peers-every", bo.peers_every, "Replay GIMPACT and FCL on every k-th step (default: steps / 60)");
+  bench->add_option("--judge-every", bo.judge_every, "Judge rays by the exact reference every k-th step (default: steps / 20)");
+  bench->add_option("--gimpact-host-steps", bo.gimpact_host_steps, "Steps of the GIMPACT-hosted simulation (default: all)");
+  bench->add_option("--seeds", bo.seeds, "Seeds per interpenetration variant")->check(CLI::Range(1, 100));
+  bench->add_flag("--no-plots", bo.no_plots, "Skip the PNG plots");
+
   try {
     app.parse(argc, argv);
     if (*backends) return run_backends(backends_json);
+    if (*bench) {
+      bo.command = "rtcd";
+      for (int i = 1; i < argc; ++i) bo.command += std::string(" ") + argv[i];
+      return rtcd::cli::run_bench(bo);
+    }
     if (*run) {
       if (run_steps > 0) r.steps = run_steps;
       return rtcd::cli::run_scene(r);

@@ -19,6 +19,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 
+#include "console.hpp"
 #include "rtcd/sim/simulation.hpp"
 
 namespace rtcd::cli {
@@ -34,14 +35,6 @@ std::string timestamp() {
   char text[32];
   std::strftime(text, sizeof text, "%Y%m%d-%H%M%S", &tm);
   return text;
-}
-
-std::string machine() {
-  std::ifstream cpu("/proc/cpuinfo");
-  std::string line;
-  while (std::getline(cpu, line))
-    if (line.rfind("model name", 0) == 0) return line.substr(line.find(':') + 2);
-  return "unknown CPU";
 }
 
 double peak_rss_mib() {
@@ -65,34 +58,6 @@ void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
   else out << ',';
   out << '\n';
 }
-
-// A bar with rate and time left on a terminal; a plain line every 10% otherwise.
-class Progress {
- public:
-  Progress(uint64_t total) : total_(total), tty_(isatty(STDOUT_FILENO)), start_(Clock::now()) {}
-  void update(uint64_t done) {
-    const double elapsed = std::chrono::duration<double>(Clock::now() - start_).count();
-    const double rate = elapsed > 0 ? done / elapsed : 0;
-    const double left = rate > 0 ? (total_ - done) / rate : 0;
-    if (tty_) {
-      const int width = 30, filled = int(width * done / total_);
-      std::printf("\r[%s%s] %3d%%  %llu/%llu steps  %.1f steps/s  %.0f s left ", std::string(filled, '#').c_str(),
-                  std::string(width - filled, ' ').c_str(), int(100 * done / total_), (unsigned long long)done,
-                  (unsigned long long)total_, rate, left);
-      if (done == total_) std::printf("\n");
-      std::fflush(stdout);
-    } else if (done == total_ || 10 * done / total_ != 10 * (done - 1) / total_) {
-      std::printf("step %llu/%llu  %.1f steps/s  %.0f s left\n", (unsigned long long)done, (unsigned long long)total_,
-                  rate, left);
-      std::fflush(stdout);
-    }
-  }
-
- private:
-  uint64_t total_;
-  bool tty_;
-  Clock::time_point start_;
-};
 
 }  // namespace
 

@@ -213,6 +213,7 @@ BodySpec read_body(Object o, size_t index, const std::string& folder, const Scen
     em.centre = e.vector("centre", Eigen::Vector3d::Zero());
     em.radius = e.number("radius", 0.0, 0.0, 1e6);
     em.angular_speed = e.number("angular_speed", 0.0, -1e3, 1e3);
+    em.start = e.number("start", 0.0, 0.0, 1e9);
     em.random_orientation = e.boolean("random_orientation", true);
     e.finish();
     if (b.is_static) e.fail(e.key("rate"), "a static body cannot be emitted");

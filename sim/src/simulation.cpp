@@ -8,6 +8,8 @@
 #include <random>
 
 #include <btBulletDynamicsCommon.h>
+#include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
+#include <BulletCollision/Gimpact/btGImpactShape.h>
 
 #include "rtcd/mesh_check.hpp"
 #include "rtcd/mesh_gen.hpp"
@@ -59,7 +61,15 @@ struct Kind {
   Pose principal;                       // principal frame in the shape frame (identity when static)
   std::unique_ptr<btBoxShape> bounds;   // the broad phase's box, in the principal frame
   std::unique_ptr<btCompoundShape> collision;
+  // Bullet's own narrow phase (kGimpact): the mesh in the principal frame,
+  // or a primitive placed in it.
+  std::vector<btScalar> gimpact_vertices;
+  std::vector<int> gimpact_indices;
+  std::unique_ptr<btTriangleIndexVertexArray> gimpact_mesh;
+  std::unique_ptr<btCollisionShape> gimpact_shape, gimpact_child;
   RenderMesh render;
+
+  btCollisionShape* collision_shape() const { return gimpact_shape ? gimpact_shape.get() : collision.get(); }
 };
 
 struct Body {
@@ -92,7 +102,55 @@ Eigen::Vector3f palette(size_t i) {
   return colours[i % std::size(colours)];
 }
 
+// Bullet's own shape for a kind, in its principal frame.
+void make_gimpact_shape(Kind& k) {
+  const Pose to_principal = k.principal.inverse();
+  if (const Mesh* m = k.shape->mesh()) {
+    for (const auto& p : m->positions()) {
+      const Eigen::Vector3d q = to_principal.apply(p.cast<double>());
+      k.gimpact_vertices.insert(k.gimpact_vertices.end(), {btScalar(q.x()), btScalar(q.y()), btScalar(q.z())});
+    }
+    for (const auto& t : m->triangles()) k.gimpact_indices.insert(k.gimpact_indices.end(), {int(t[0]), int(t[1]), int(t[2])});
+    k.gimpact_mesh = std::make_unique<btTriangleIndexVertexArray>(
+        int(m->triangle_count()), k.gimpact_indices.data(), int(3 * sizeof(int)), int(m->vertex_count()),
+        k.gimpact_vertices.data(), int(3 * sizeof(btScalar)));
+    auto shape = std::make_unique<btGImpactMeshShape>(k.gimpact_mesh.get());
+    shape->updateBound();
+    k.gimpact_shape = std::move(shape);
+    return;
+  }
+  if (const Sphere* sphere = std::get_if<Sphere>(&k.shape->geometry()))
+    k.gimpact_child = std::make_unique<btSphereShape>(btScalar(sphere->radius));
+  else
+    k.gimpact_child = std::make_unique<btBoxShape>(bt(std::get<Box>(k.shape->geometry()).half_extents));
+  auto compound = std::make_unique<btCompoundShape>(false);
+  compound->addChildShape(bt(to_principal), k.gimpact_child.get());
+  k.gimpact_shape = std::move(compound);
+}
+
 }  // namespace
+
+std::vector<std::shared_ptr<const Shape>> make_shapes(const Scene& scene, std::vector<std::string>* warnings) {
+  std::vector<std::shared_ptr<const Shape>> out;
+  for (const BodySpec& spec : scene.bodies) {
+    if (!spec.mesh.empty()) {
+      MeshData data = read_mesh_file(spec.mesh);
+      for (auto& p : data.positions) p *= float(spec.scale);
+      MeshOptions options;
+      options.weld = spec.weld;
+      Mesh mesh(std::move(data.positions), std::move(data.triangles), options);
+      if (std::string w = self_intersection_warning(mesh, spec.mesh); !w.empty() && warnings) warnings->push_back(w);
+      out.push_back(std::make_shared<Shape>(std::move(mesh)));
+    } else if (spec.blob) {
+      out.push_back(std::make_shared<Shape>(gen::concave_blob(int(spec.blob->triangles), spec.blob->seed, spec.blob->radius)));
+    } else if (spec.sphere) {
+      out.push_back(std::make_shared<Shape>(Sphere{*spec.sphere}));
+    } else {
+      out.push_back(std::make_shared<Shape>(Box{*spec.box}));
+    }
+  }
+  return out;
+}
 
 struct Simulation::Impl {
   Scene scene;
@@ -101,7 +159,8 @@ struct Simulation::Impl {
   std::unique_ptr<NarrowPhase> probe;   // the interpenetration pass's: stateless, full tracing
   std::unique_ptr<btDefaultCollisionConfiguration> configuration;
   std::unique_ptr<btCollisionDispatcher> dispatcher;
-  BatchDispatcher* batch = nullptr;  // dispatcher, when contacts are simulated
+  BatchDispatcher* batch = nullptr;  // dispatcher, when rtcd answers the contacts
+  bool gimpact = false;              // Bullet's GIMPACT answers them
   std::unique_ptr<btDbvtBroadphase> broadphase;
   std::unique_ptr<btSequentialImpulseConstraintSolver> solver;
   std::unique_ptr<TimedWorld> world;
@@ -130,19 +189,24 @@ struct Simulation::Impl {
 Simulation::Impl::Impl(const Scene& s, const std::string& backend_override) : scene(s), rng(s.seed) {
   backend_name = backend_override.empty() ? scene.backend : backend_override;
   const bool contacts = scene.has(Effect::contacts);
-  if (contacts) narrow = make_narrow_phase(backend_name, scene.narrow);
+  gimpact = contacts && backend_name == kGimpact;
+  if (contacts && !gimpact) narrow = make_narrow_phase(backend_name, scene.narrow);
   if (scene.has(Effect::interpenetration)) {
     Config c = scene.narrow;
     c.mode = Mode::full;
     c.predictive = false;
-    probe = make_narrow_phase(backend_name, c);
+    probe = make_narrow_phase(backend_name == kGimpact ? "auto" : backend_name, c);
   }
-  if (narrow) backend_name = narrow->name();
+  if (gimpact) backend_name = kGimpact;
+  else if (narrow) backend_name = narrow->name();
   else if (probe) backend_name = probe->name();
   else backend_name = "none";
 
   configuration = std::make_unique<btDefaultCollisionConfiguration>();
-  if (contacts) {
+  if (gimpact) {
+    dispatcher = std::make_unique<btCollisionDispatcher>(configuration.get());
+    btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
+  } else if (contacts) {
     DispatcherOptions options;
     options.points_per_pair = scene.points_per_pair;
     options.speculative = scene.has(Effect::speculative);
@@ -181,29 +245,14 @@ Simulation::Impl::~Impl() {
 
 void Simulation::Impl::make_kinds() {
   const double grow = 0.5 * scene.narrow.distance_extension;  // two bodies within the extension overlap
+  const auto shapes = make_shapes(scene, &warnings);
   for (size_t i = 0; i < scene.bodies.size(); ++i) {
     const BodySpec& spec = scene.bodies[i];
     Kind k;
-    if (!spec.mesh.empty()) {
-      MeshData data = read_mesh_file(spec.mesh);
-      for (auto& p : data.positions) p *= float(spec.scale);
-      MeshOptions options;
-      options.weld = spec.weld;
-      Mesh mesh(std::move(data.positions), std::move(data.triangles), options);
-      if (std::string w = self_intersection_warning(mesh, spec.mesh); !w.empty()) warnings.push_back(w);
-      k.render = render_mesh(mesh);
-      k.shape = std::make_shared<Shape>(std::move(mesh));
-    } else if (spec.blob) {
-      Mesh mesh = gen::concave_blob(int(spec.blob->triangles), spec.blob->seed, spec.blob->radius);
-      k.render = render_mesh(mesh);
-      k.shape = std::make_shared<Shape>(std::move(mesh));
-    } else if (spec.sphere) {
-      k.shape = std::make_shared<Shape>(Sphere{*spec.sphere});
-      k.render = render_mesh(gen::icosphere(*spec.sphere, 3));
-    } else {
-      k.shape = std::make_shared<Shape>(Box{*spec.box});
-      k.render = render_mesh(gen::box(*spec.box));
-    }
+    k.shape = shapes[i];
+    if (const Mesh* m = k.shape->mesh()) k.render = render_mesh(*m);
+    else if (spec.sphere) k.render = render_mesh(gen::icosphere(*spec.sphere, 3));
+    else k.render = render_mesh(gen::box(*spec.box));
     if (!spec.is_static) {
       k.mass = spec.mass ? mass_properties_for_mass(*k.shape, *spec.mass) : mass_properties(*k.shape, *spec.density);
       k.principal = k.mass.principal_frame();
@@ -225,6 +274,7 @@ void Simulation::Impl::make_kinds() {
     k.bounds = std::make_unique<btBoxShape>(bt(0.5 * (local.max - local.min)));
     k.collision = std::make_unique<btCompoundShape>(false);
     k.collision->addChildShape(btTransform(btQuaternion::getIdentity(), bt(0.5 * (local.max + local.min))), k.bounds.get());
+    if (gimpact) make_gimpact_shape(k);
     if (narrow) k.id = narrow->add_shape(k.shape);
     if (probe) k.probe_id = probe->add_shape(k.shape);
     kinds.push_back(std::move(k));
@@ -265,7 +315,7 @@ void Simulation::Impl::add_body(size_t spec_index, const Pose& shape_pose, const
   const BodySpec& spec = scene.bodies[spec_index];
   Kind& k = kinds[spec_index];
   const double mass = spec.is_static ? 0.0 : k.mass.mass;
-  btRigidBody::btRigidBodyConstructionInfo info(btScalar(mass), nullptr, k.collision.get(),
+  btRigidBody::btRigidBodyConstructionInfo info(btScalar(mass), nullptr, k.collision_shape(),
                                                 spec.is_static ? btVector3(0, 0, 0) : bt(k.mass.principal_moments));
   info.m_startWorldTransform = bt(shape_pose * k.principal);
   info.m_friction = btScalar(spec.friction);
@@ -310,9 +360,9 @@ void Simulation::Impl::emit(double time) {
     const BodySpec& spec = scene.bodies[i];
     if (!spec.emitter) continue;
     const auto& e = *spec.emitter;
-    // Body n appears at time n / rate.
-    while (emitted[i] < spec.count && double(emitted[i]) / e.rate <= time + 1e-9) {
-      const double at = double(emitted[i]) / e.rate, angle = e.angular_speed * at;
+    // Body n appears at time start + n / rate.
+    while (emitted[i] < spec.count && e.start + double(emitted[i]) / e.rate <= time + 1e-9) {
+      const double at = e.start + double(emitted[i]) / e.rate, angle = e.angular_speed * at;
       Pose pose;
       pose.position = e.centre + e.radius * Eigen::Vector3d(std::cos(angle), std::sin(angle), 0.0);
       if (e.random_orientation) pose.orientation = random_orientation(rng);
@@ -407,6 +457,20 @@ const StepRecord& Simulation::step() {
     r.predictive = n.predictive.size();
     r.solver_points = batch.points;
     r.speculative_points = batch.speculative_points;
+    const BodyId ground = m.scene.ground.present ? 0 : UINT32_MAX;  // the ground is made first
+    for (const Contact& c : n.contacts) r.ground_contacts += c.source_body == ground || c.target_body == ground;
+  } else if (m.gimpact) {
+    ++m.counters.narrow_phase;
+    r.pairs = size_t(m.world->getBroadphase()->getOverlappingPairCache()->getNumOverlappingPairs());
+    btDispatcher* d = m.dispatcher.get();
+    const btCollisionObject* ground = m.scene.ground.present ? m.bodies[0].rigid.get() : nullptr;
+    for (int i = 0; i < d->getNumManifolds(); ++i) {
+      const btPersistentManifold* manifold = d->getManifoldByIndexInternal(i);
+      const size_t points = size_t(manifold->getNumContacts());
+      r.contacts += points;
+      r.solver_points += points;
+      r.ground_contacts += manifold->getBody0() == ground || manifold->getBody1() == ground ? points : 0;
+    }
   }
   for (const Body& b : m.bodies) {
     if (b.rigid->isStaticObject()) continue;
@@ -436,6 +500,25 @@ std::vector<std::string> Simulation::devices() const {
   if (impl_->narrow) return impl_->narrow->devices();
   if (impl_->probe) return impl_->probe->devices();
   return {};
+}
+
+std::span<const BodyPair> Simulation::last_pairs() const {
+  if (!impl_->batch) return {};
+  return impl_->batch->last_pairs();
+}
+
+std::vector<uint32_t> Simulation::body_kinds() const {
+  std::vector<uint32_t> out;
+  for (const Body& b : impl_->bodies) out.push_back(b.spec == SIZE_MAX ? kGroundKind : uint32_t(b.spec));
+  return out;
+}
+
+void Simulation::shape_poses(std::vector<Pose>& out) const {
+  out.clear();
+  for (const Body& b : impl_->bodies) {
+    const Pose world = pose_of(b.rigid->getWorldTransform());
+    out.push_back(b.spec == SIZE_MAX ? world : world * impl_->kinds[b.spec].principal.inverse());
+  }
 }
 
 const StepResult& Simulation::last_narrow_phase() const {

@@ -49,6 +49,8 @@ class BatchDispatcher : public btCollisionDispatcher {
 
   // The last batch: the narrow phase's answer, and what reached the solver.
   const StepResult& last_step() const { return result_; }
+  // The pairs that batch handed the narrow phase, in its order.
+  const std::vector<BodyPair>& last_pairs() const { return batch_pairs_; }
   struct Batch {
     uint64_t calls = 0;  // batches run so far
     size_t pairs = 0, points = 0, speculative_points = 0, warm_started = 0;

@@ -72,10 +72,11 @@ struct BodySpec {
     bool random_orientation = false;
   };
   std::optional<Grid> grid;
-  // Bodies appear one at a time at `rate` per second from a source moving on
-  // a horizontal circle (centre, radius, angular speed in rad/s).
+  // Bodies appear one at a time at `rate` per second from `start` on, from a
+  // source moving on a horizontal circle (centre, radius, angular speed in
+  // rad/s, angle angular_speed * t).
   struct Emitter {
-    double rate = 1.0;
+    double rate = 1.0, start = 0.0;
     Eigen::Vector3d centre = Eigen::Vector3d::Zero();
     double radius = 0.0, angular_speed = 0.0;
     bool random_orientation = true;

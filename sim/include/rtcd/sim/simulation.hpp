@@ -4,6 +4,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -36,6 +37,7 @@ struct StepRecord {
   size_t pairs = 0, pairs_full = 0, pairs_iterative = 0;
   size_t rays_full = 0, rays_predictive = 0, rays_iterative = 0;
   size_t contacts = 0, predictive = 0, solver_points = 0, speculative_points = 0;
+  size_t ground_contacts = 0;  // contacts between a body and the ground
   double kinetic_energy = 0;
   // Set on the steps the interpenetration pass ran (else negative).
   double interpenetration = -1;  // summed depth of every penetrating ray
@@ -52,9 +54,19 @@ struct BodyState {
   size_t spec = 0;
 };
 
+// The shape of every entry of scene.bodies, in its file's frame, scaled;
+// self-intersecting meshes add a line to `warnings`.
+std::vector<std::shared_ptr<const Shape>> make_shapes(const Scene& scene, std::vector<std::string>* warnings = nullptr);
+
+// The narrow phase named "gimpact" is Bullet's own: meshes collide as
+// btGImpactMeshShape through btGImpactCollisionAlgorithm (Bullet's default
+// margin), the reference the thesis measured the whole step against.
+inline constexpr const char* kGimpact = "gimpact";
+
 class Simulation {
  public:
-  // backend overrides the scene's when not empty.
+  // backend overrides the scene's when not empty: a registered backend, or
+  // kGimpact.
   explicit Simulation(const Scene& scene, const std::string& backend = "");
   ~Simulation();
   Simulation(const Simulation&) = delete;
@@ -72,6 +84,15 @@ class Simulation {
   std::vector<BodyState> bodies() const;
   // The narrow phase's answer on the last step (contacts, predictive rays).
   const StepResult& last_narrow_phase() const;
+  // The broad phase's pairs that step handed rtcd's narrow phase.
+  std::span<const BodyPair> last_pairs() const;
+
+  // Every body the narrow phase knows, by BodyId, the ground included: the
+  // index of its entry in scene.bodies (kGroundKind for the ground) and its
+  // shape's world pose. Bodies are only ever added, so ids stay put.
+  static constexpr uint32_t kGroundKind = UINT32_MAX;
+  std::vector<uint32_t> body_kinds() const;
+  void shape_poses(std::vector<Pose>& out) const;
 
   // A bit-exact digest of every body's pose and velocities.
   uint64_t state_hash() const;

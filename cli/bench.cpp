@@ -1,0 +1,62 @@
+// `rtcd bench`: runs the experiments, then draws the plots
+// (scripts/plot_bench.py with Debian's python3-matplotlib).
+#include "bench.hpp"
+
+#include <filesystem>
+#include <iostream>
+#include <memory>
+#include <thread>
+
+#include "console.hpp"
+#include "rtcd/error.hpp"
+#include "rtcd/experiments/bench.hpp"
+
+namespace rtcd::cli {
+namespace {
+namespace fs = std::filesystem;
+
+// "avalanche" names data/scenes/avalanche.json; anything else is a path.
+std::string scene_file(const std::string& name) {
+  if (fs::exists(name)) return name;
+  const fs::path named = fs::path(RTCD_SCENES_DIR) / (name + ".json");
+  if (name.find('/') == std::string::npos && fs::exists(named)) return named.string();
+  throw UsageError(name + ": no such scene file, nor a scene of that name in " + std::string(RTCD_SCENES_DIR));
+}
+
+}  // namespace
+
+int run_bench(const BenchOptions& o) {
+  experiments::BenchOptions b;
+  if (o.replay.empty() == o.scene.empty()) throw UsageError("give a SCENE, or --replay FILE (not both)");
+  if (!o.scene.empty()) b.scene = scene_file(o.scene);
+  b.replay = o.replay;
+  const std::string name = o.scene.empty() ? fs::path(o.replay).stem().string() : fs::path(b.scene).stem().string();
+  b.out = o.out.empty() ? (fs::path("runs") / ("bench-" + name)).string() : o.out;
+  b.full_every = o.full_every;
+  b.peers_every = o.peers_every;
+  b.judge_every = o.judge_every;
+  b.gimpact_host_steps = o.gimpact_host_steps;
+  b.seeds = o.seeds;
+  b.command = "Machine: " + machine() + ", " + std::to_string(std::thread::hardware_concurrency()) +
+              " cores; build " RTCD_BUILD_TYPE "; command `" + o.command + "`.";
+  std::unique_ptr<Progress> bar;
+  std::string stage;
+  b.progress = [&](const std::string& s, uint64_t done, uint64_t total) {
+    if (s != stage || !bar) {
+      stage = s;
+      bar = std::make_unique<Progress>(total, s);
+    }
+    bar->update(done);
+  };
+  std::cout << b.command << '\n';
+  const std::string report = experiments::run_bench(b);
+  if (!o.no_plots) {
+    const std::string command = "/usr/bin/python3 '" + std::string(RTCD_BENCH_PLOT_SCRIPT) + "' '" + b.out + "'";
+    if (std::system(command.c_str()) != 0)
+      std::cerr << "rtcd: warning: the plots were not made (" << command << " failed; python3-matplotlib installed?)\n";
+  }
+  std::cout << "report: " << report << '\n';
+  return 0;
+}
+
+}  // namespace rtcd::cli

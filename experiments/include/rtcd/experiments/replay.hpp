@@ -1,0 +1,71 @@
+// Replays a recorded simulation through several narrow phases in lockstep:
+// at every step each configuration sees the same poses and the same
+// broad-phase pairs. Ours (any backend, mode and knobs, on a chosen number
+// of threads), Bullet's GIMPACT and FCL; rays of ours judged against the
+// exact reference on sampled steps.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "rtcd/config.hpp"
+#include "rtcd/sim/recording.hpp"
+
+namespace rtcd::experiments {
+
+enum class Engine {
+  ours,     // make_narrow_phase(backend, config)
+  gimpact,  // btGImpactMeshShape pairs through btGImpactCollisionAlgorithm, every penetrating point
+  fcl,      // fcl::collide on BVHModel<OBBRSS> meshes, every contact
+};
+const char* to_string(Engine engine);
+
+struct ReplayConfig {
+  std::string label;  // "auto embree", "GIMPACT", ...
+  Engine engine = Engine::ours;
+  std::string backend = "embree";
+  Config config;
+  int threads = 1;
+  // Replayed on steps 0, every, 2 every, ... only. Stateless configurations
+  // alone may skip steps: iterative and automatic ones carry pair state.
+  uint64_t every = 1;
+  bool stateless() const { return engine != Engine::ours || config.mode == Mode::full; }
+};
+
+struct ReplayStep {
+  bool ran = false;
+  double seconds = 0;  // the whole query: detect, or every pair's collide
+  // Ours: where detect spent it (StepStats); full + iterative is the ray
+  // time, tracing and walking, what the thesis timed.
+  double seconds_prepare = 0, seconds_full = 0, seconds_iterative = 0, seconds_gather = 0;
+  double seconds_rays() const { return seconds_full + seconds_iterative; }
+  size_t pairs = 0, colliding = 0, contacts = 0;
+  size_t pairs_full = 0, pairs_iterative = 0, rays = 0;
+  double depth_sum = 0;  // summed depth of every contact as the engine reports it
+  // Judged steps (ours): ray origins the exact reference puts deeper than
+  // epsilon inside the other body, and of those the ones with no contact.
+  bool judged = false;
+  size_t deep = 0, missed = 0;
+};
+
+struct ReplayRun {
+  ReplayConfig config;
+  std::string engine_name;  // the backend's name, or the library's
+  std::vector<ReplayStep> steps;  // one per recorded step
+};
+
+struct ReplayOptions {
+  uint64_t judge_every = 0;     // 0: never
+  double epsilon_scale = 1e-5;  // no claim on origins this close (times the larger radius) to the surface
+  // Called after each step with (steps done, steps in all).
+  std::function<void(uint64_t, uint64_t)> progress;
+};
+
+// Throws UsageError for a configuration that cannot be replayed (a stateful
+// one sampled, an unknown backend).
+std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector<ReplayConfig>& configs,
+                              const ReplayOptions& options = {});
+
+}  // namespace rtcd::experiments
