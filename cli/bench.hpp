@@ -10,7 +10,8 @@ struct BenchOptions {
   std::string scene;   // a file, or a name under data/scenes ("avalanche")
   std::string replay;  // a recording to replay instead of simulating anew
   std::string out;     // default: runs/bench-<scene>-<timestamp>/
-  uint64_t full_every = 0, peers_every = 0, judge_every = 0, gimpact_host_steps = 0;
+  uint64_t full_every = 0, peers_every = 0, judge_every = 0, gimpact_host_steps = 600;
+  double budget_seconds = 300;
   uint32_t seeds = 3;
   bool no_plots = false;
   std::string command;  // the command line as typed

@@ -20,7 +20,8 @@ inline std::string machine() {
   return "unknown CPU";
 }
 
-// A bar with rate and time left on a terminal; a plain line every 10% otherwise.
+// A bar with rate and time left on a terminal; otherwise a plain line at the
+// end and at each tenth at most every 5 s.
 class Progress {
  public:
   explicit Progress(uint64_t total, std::string label = "", std::string unit = "steps")
@@ -40,7 +41,8 @@ class Progress {
                   (unsigned long long)done, (unsigned long long)total_, unit_.c_str(), rate, unit_.c_str(), left);
       if (done == total_) std::printf("\n");
       std::fflush(stdout);
-    } else if (done == total_ || 10 * done / total_ != 10 * (done - 1) / total_) {
+    } else if (done == total_ || (10 * done / total_ != 10 * (done - 1) / total_ && elapsed - printed_ > 5)) {
+      printed_ = elapsed;
       std::printf("%s%s%s %llu/%llu  %.1f %s/s  %.0f s left\n", label, gap, unit_.c_str(), (unsigned long long)done,
                   (unsigned long long)total_, rate, unit_.c_str(), left);
       std::fflush(stdout);
@@ -51,6 +53,7 @@ class Progress {
   uint64_t total_;
   std::string label_, unit_;
   bool tty_;
+  double printed_ = -1e9;  // when the last plain line was printed
   std::chrono::steady_clock::time_point start_;
 };
 

@@ -150,10 +150,13 @@ int main(int argc, char** argv) {
   bench->add_option("SCENE", bo.scene, "avalanche, stream, their _small versions, or a scene file");
   bench->add_option("--replay", bo.replay, "Replay this recording (recording.rtcdrec of an earlier bench) instead");
   bench->add_option("--out", bo.out, "Output folder (default: runs/bench-<scene>/)");
-  bench->add_option("--full-every", bo.full_every, "Replay full tracing on every k-th step (default: steps / 600)");
+  bench->add_option("--full-every", bo.full_every, "Replay full tracing with the basic tracer on every k-th step (default: steps / 60)");
   bench->add_option("--peers-every", bo.peers_every, "Replay GIMPACT and FCL on every k-th step (default: steps / 60)");
   bench->add_option("--judge-every", bo.judge_every, "Judge rays by the exact reference every k-th step (default: steps / 20)");
-  bench->add_option("--gimpact-host-steps", bo.gimpact_host_steps, "Steps of the GIMPACT-hosted simulation (default: all)");
+  bench->add_option("--gimpact-host-steps", bo.gimpact_host_steps, "Steps of the GIMPACT-hosted simulation (default: 600)")
+      ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
+  bench->add_option("--budget", bo.budget_seconds, "Seconds a replayed configuration may take in all before it stops")
+      ->check(CLI::Range(1.0, 1e9));
   bench->add_option("--seeds", bo.seeds, "Seeds per interpenetration variant")->check(CLI::Range(1, 100));
   bench->add_flag("--no-plots", bo.no_plots, "Skip the PNG plots");
 

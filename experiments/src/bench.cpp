@@ -253,7 +253,7 @@ std::string run_bench(const BenchOptions& o) {
   const Motion motion = largest_motion(recording);
 
   // 2. The replays, in lockstep.
-  const uint64_t full_every = o.full_every ? o.full_every : std::max<uint64_t>(1, steps / 600);
+  const uint64_t full_every = o.full_every ? o.full_every : std::max<uint64_t>(1, steps / 60);
   const uint64_t peers_every = o.peers_every ? o.peers_every : std::max<uint64_t>(1, steps / 60);
   const uint64_t judge_every = o.judge_every ? o.judge_every : std::max<uint64_t>(1, steps / 20);
   const Config base = scene.narrow;
@@ -265,7 +265,8 @@ std::string run_bench(const BenchOptions& o) {
     c.config.mode = mode;
     if (threshold >= 0) c.config.displacement_threshold = threshold;
     c.threads = threads;
-    c.every = mode == Mode::full ? full_every : 1;
+    c.every = mode == Mode::full && backend == "basic" ? full_every : 1;
+    c.budget_seconds = o.budget_seconds;
     return c;
   };
   const std::string n_threads = std::to_string(cores) + " threads";
@@ -290,6 +291,7 @@ std::string run_bench(const BenchOptions& o) {
     c.label = to_string(e);
     c.engine = e;
     c.every = peers_every;
+    c.budget_seconds = o.budget_seconds;
     configs.push_back(c);
   }
   ReplayOptions ro;
@@ -303,7 +305,7 @@ std::string run_bench(const BenchOptions& o) {
   };
 
   // 3. The same scene with Bullet's GIMPACT as the narrow phase (Figure 2.12).
-  const uint64_t host_steps = std::min(steps, o.gimpact_host_steps ? o.gimpact_host_steps : steps);
+  const uint64_t host_steps = std::min(steps, std::max<uint64_t>(1, o.gimpact_host_steps));
   std::vector<sim::StepRecord> gimpact_host;
   {
     sim::Scene s = scene;
@@ -332,7 +334,8 @@ std::string run_bench(const BenchOptions& o) {
   variants.push_back({"2.4", "standard constraints", with_effects(scene, true, speculative, false), "", true});
   variants.push_back({"2.4", "projected constraints", with_effects(scene, true, speculative, true), "", true});
   for (const ReplayConfig& c : configs) {
-    if (c.engine != Engine::ours || c.threads != 1) continue;
+    // Simulated with Embree only: the tracers find the same contacts.
+    if (c.engine != Engine::ours || c.threads != 1 || c.backend != "embree") continue;
     sim::Scene s = with_effects(scene, base.predictive, speculative, base.projected);
     s.narrow = c.config;
     variants.push_back({"accuracy", c.label, s, c.backend, false});
@@ -381,10 +384,19 @@ std::string run_bench(const BenchOptions& o) {
                    "tracing once they penetrate."
                  : "within it, so predictive rays see every impact one step ahead.")
          << "\n\nPhases: " << phases.rule() << ".\n\n";
-  report << "Sampling: full tracing replayed every " << full_every << " step(s), GIMPACT and FCL every " << peers_every
+  report << "Sampling: full tracing with the basic tracer replayed every " << full_every << " step(s), GIMPACT and FCL every " << peers_every
          << ", rays judged by the exact reference every " << judge_every
          << "; iterative and automatic configurations run on every step. Replays on one thread unless the label says "
-            "otherwise. The recording was simulated on one thread.\n\n";
+            "otherwise. The recording was simulated on one thread. A configuration stops once its steps have taken "
+         << o.budget_seconds << " s in all";
+  bool any_stopped = false;
+  for (const ReplayRun& r : runs)
+    if (r.stopped()) {
+      report << (any_stopped ? "; " : ": ") << r.config.label << " stopped at step " << r.stopped_at << " ("
+             << recording.steps()[r.stopped_at].bodies << " bodies)";
+      any_stopped = true;
+    }
+  report << (any_stopped ? ".\n\n" : "; none did.\n\n");
 
   // Table 2.1.
   {
@@ -456,7 +468,7 @@ std::string run_bench(const BenchOptions& o) {
       b += r.seconds_broad, n += r.seconds_narrow, s += r.seconds_solver, e += r.seconds_effects, w += r.seconds_total;
     }
     const double k = 1.0 / double(host_steps);
-    t.rows.push_back({"rtcd (" + scene.backend + ", " + to_string(base.mode) + ")", ms(b * k), ms(n * k), ms(s * k),
+    t.rows.push_back({"rtcd (" + make_narrow_phase(scene.backend, base)->name() + ", " + to_string(base.mode) + " mode)", ms(b * k), ms(n * k), ms(s * k),
                       ms(e * k), ms(w * k)});
     const double ours_whole = w * k;
     b = n = s = e = w = 0;
@@ -505,14 +517,20 @@ std::string run_bench(const BenchOptions& o) {
            << '\n';
     report << "## Figure 2.13: ray time per step, every configuration\n\n![Figure 2.13](figure_2_13.png)\n\n";
     // The end of the run (its last tenth): the speedups of Figure 2.14.
-    const uint64_t tail = steps - std::max<uint64_t>(1, steps / 10);
+    // The last tenth of the steps both configurations of a tracer ran.
     Table t;
-    t.header = {"last " + std::to_string(steps - tail) + " steps, 1 thread", "full: mean ray time (ms)",
-                "automatic (ms)", "speedup"};
+    t.header = {"end of the run, 1 thread", "steps", "bodies", "full: mean ray time (ms)", "automatic (ms)", "speedup"};
     for (const std::string tracer : {"basic", "embree"}) {
-      const double f = stats(run_of("full " + tracer), tail, steps, rays_of).mean;
-      const double a = stats(run_of("auto " + tracer), tail, steps, rays_of).mean;
-      t.rows.push_back({tracer, ms(f), ms(a), ratio(f / a)});
+      const ReplayRun& full = run_of("full " + tracer);
+      const ReplayRun& autom = run_of("auto " + tracer);
+      const uint64_t end = std::min({steps, full.stopped_at, autom.stopped_at});
+      const uint64_t begin = end - std::max<uint64_t>(1, steps / 10);
+      const double f = stats(full, begin, end, rays_of).mean;
+      const double a = stats(autom, begin, end, rays_of).mean;
+      t.rows.push_back({tracer, "[" + std::to_string(begin) + ", " + std::to_string(end) + ")",
+                        std::to_string(recording.steps()[begin].bodies) + " – " +
+                            std::to_string(recording.steps()[end - 1].bodies),
+                        ms(f), ms(a), ratio(f / a)});
     }
     report << "## Figure 2.14: ray time against the body count\n\n![Figure 2.14](figure_2_14.png)\n\n";
     t.markdown(report);
@@ -521,10 +539,13 @@ std::string run_bench(const BenchOptions& o) {
 
   // Peers on the sampled steps.
   {
+    // The steps both peers ran.
     std::vector<bool> sampled(steps, false);
-    for (uint64_t i = 0; i < steps; i += peers_every) sampled[i] = true;
+    size_t sampled_count = 0;
+    for (uint64_t i = 0; i < steps; ++i)
+      sampled_count += sampled[i] = run_of("GIMPACT").steps[i].ran && run_of("FCL").steps[i].ran;
     Table t;
-    t.header = {"narrow phase (" + std::to_string((steps + peers_every - 1) / peers_every) + " sampled steps)",
+    t.header = {"narrow phase (" + std::to_string(sampled_count) + " sampled steps)",
                 "median step (ms)", "peak step (ms)", "GIMPACT ÷ it, median", "FCL ÷ it, median", "GIMPACT ÷ it, peak",
                 "FCL ÷ it, peak", "colliding pairs", "contacts"};
     const Stats g = stats(run_of("GIMPACT"), 0, steps, whole_of, &sampled);

@@ -212,6 +212,7 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
   sim::Recording::Cursor cursor(recording);
   sim::RecordedFrame frame;
   const uint64_t total = recording.steps().size();
+  std::vector<double> spent(configs.size(), 0.0);
   while (cursor.next(frame)) {
     const uint64_t step = cursor.index();
     while (body_shape.size() < frame.poses.size()) {
@@ -223,11 +224,16 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
     std::optional<Verdict> verdict;
     if (judge) verdict = judge_exact(frame, body_shape, shapes, exact, options.epsilon_scale);
     for (size_t i = 0; i < runners.size(); ++i) {
-      if (step % configs[i].every != 0) continue;
+      if (step % configs[i].every != 0 || runs[i].stopped()) continue;
+      if (configs[i].budget_seconds > 0 && spent[i] > configs[i].budget_seconds) {
+        runs[i].stopped_at = step;
+        continue;
+      }
       ReplayStep& out = runs[i].steps[step];
       out.ran = true;
       out.pairs = frame.pairs.size();
       runners[i]->run(frame, out);
+      spent[i] += out.seconds;
       if (verdict && runners[i]->result()) count_missed(*verdict, *runners[i]->result(), out);
     }
     if (options.progress) options.progress(step + 1, total);

@@ -31,6 +31,10 @@ struct ReplayConfig {
   // Replayed on steps 0, every, 2 every, ... only. Stateless configurations
   // alone may skip steps: iterative and automatic ones carry pair state.
   uint64_t every = 1;
+  // Once its steps have taken this many seconds in all, the configuration
+  // stops for the rest of the replay (0: never). Keeps a slow tracer from
+  // holding up a long scene; the report says where it stopped.
+  double budget_seconds = 0;
   bool stateless() const { return engine != Engine::ours || config.mode == Mode::full; }
 };
 
@@ -54,6 +58,8 @@ struct ReplayRun {
   ReplayConfig config;
   std::string engine_name;  // the backend's name, or the library's
   std::vector<ReplayStep> steps;  // one per recorded step
+  uint64_t stopped_at = UINT64_MAX;  // the first step it skipped for its budget
+  bool stopped() const { return stopped_at != UINT64_MAX; }
 };
 
 struct ReplayOptions {
