@@ -49,14 +49,13 @@ int run_bench(const BenchOptions& o) {
     }
     bar->update(done);
   };
-  std::cout << b.command << '\n';
   const std::string report = experiments::run_bench(b);
   if (!o.no_plots) {
     const std::string command = "/usr/bin/python3 '" + std::string(RTCD_BENCH_PLOT_SCRIPT) + "' '" + b.out + "'";
     if (std::system(command.c_str()) != 0)
       std::cerr << "rtcd: warning: the plots were not made (" << command << " failed; python3-matplotlib installed?)\n";
   }
-  std::cout << "report: " << report << '\n';
+  std::cout << b.command << "\nreport: " << report << '\n';
   return 0;
 }
 

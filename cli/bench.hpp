@@ -11,7 +11,7 @@ struct BenchOptions {
   std::string replay;  // a recording to replay instead of simulating anew
   std::string out;     // default: runs/bench-<scene>-<timestamp>/
   uint64_t full_every = 0, peers_every = 0, judge_every = 0, gimpact_host_steps = 600;
-  double budget_seconds = 300;
+  double budget_seconds = 900;
   uint32_t seeds = 3;
   bool no_plots = false;
   std::string command;  // the command line as typed

@@ -288,9 +288,45 @@ def scene_seeds():
     return seeds
 
 
+def recording_seeds():
+    """Small recordings in the format of sim/include/rtcd/sim/recording.hpp:
+    bodies appearing over time, pairs joining and leaving."""
+    scene = json.dumps({"time_step": 0.01, "steps": 3, "effects": ["gravity", "contacts", "predictive"],
+                        "bodies": [{"sphere": 0.5, "count": 3,
+                                    "grid": {"cells": [3, 1, 1], "spacing": [0.9, 1, 1]}}]}).encode()
+
+    def text(b):
+        return struct.pack("<I", len(b)) + b
+
+    def listed(fmt, values):
+        return struct.pack("<I", len(values)) + b"".join(struct.pack(fmt, v) for v in values)
+
+    def step(n, kinds, bodies, pairs, left, joined):
+        out = b"STEP" + struct.pack("<QdIIIId", n, 0.01 * (n + 1), bodies, pairs, 2 * pairs, 1, 1.5)
+        out += struct.pack("<5d", 1e-4, 2e-4, 3e-4, 0, 6e-4)
+        out += listed("<I", kinds)
+        poses = []
+        for b in range(bodies):
+            poses += [0.9 * b, 0.01 * n, 0.5, 0.0, 0.0, 0.0, 1.0]
+        out += listed("<f", poses)
+        out += listed("<Q", left) + listed("<Q", joined)
+        return out
+
+    def key(a, b):
+        return a << 32 | b
+
+    head = b"RTCDREC1" + text(b"fuzz/scene.json") + text(scene)
+    ground = 0xFFFFFFFF
+    steps = (step(0, [ground, 0, 0, 0], 4, 3, [], [key(0, 1), key(0, 2), key(1, 2)]) +
+             step(1, [], 4, 3, [key(0, 2)], [key(2, 3)]) +
+             step(2, [], 4, 1, [key(0, 1), key(2, 3)], []))
+    return {"three_steps.rtcdrec": head + steps, "header_only.rtcdrec": head}
+
+
 def main():
     for harness, seeds in (("mesh_pair", mesh_pair_seeds()), ("mesh_file", mesh_file_seeds()),
-                           ("pose_sequence", pose_sequence_seeds()), ("scene", scene_seeds())):
+                           ("pose_sequence", pose_sequence_seeds()), ("scene", scene_seeds()),
+                           ("recording", recording_seeds())):
         folder = CORPUS / harness
         folder.mkdir(parents=True, exist_ok=True)
         for old in folder.iterdir():

@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 
 seconds=${FUZZ_SECONDS:-60}
 timeout=${FUZZ_TIMEOUT:-30}  # seconds one input may take before it counts as a hang
-all=(mesh_pair mesh_file pose_sequence scene)
+all=(mesh_pair mesh_file pose_sequence scene recording)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
 cmake --preset fuzz >/dev/null || exit 1

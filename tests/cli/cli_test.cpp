@@ -8,6 +8,7 @@
 #include <filesystem>
 #include <fstream>
 #include <set>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -200,6 +201,42 @@ TEST(CliQuery, SizesOutsideTheSupportedRangeAreRefused) {
   const Outcome box = run("query box:0.5,0.5,0.5 box:1e13,1e13,1e13");
   EXPECT_EQ(box.code, 2) << box.out;
   EXPECT_NE(box.out.find("outside the supported sizes"), std::string::npos) << box.out;
+}
+
+}  // namespace
+
+namespace {
+
+// The small version of the stream scene through the whole bench, then its
+// recording replayed; bad bench inputs exit 2 with one line.
+TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
+  const std::string out = (dir_ / "bench").string();
+  const Outcome r = run("bench stream_small --seeds 1 --gimpact-host-steps 20 --no-plots --out " + out);
+  ASSERT_EQ(r.code, 0) << r.out;
+  EXPECT_NE(r.out.find("report: "), std::string::npos) << r.out;
+  std::ifstream report(out + "/report.md");
+  std::stringstream text;
+  text << report.rdbuf();
+  EXPECT_NE(text.str().find("stream_small.json"), std::string::npos);
+  EXPECT_NE(text.str().find("| auto embree |"), std::string::npos);
+  const std::string again = (dir_ / "again").string();
+  const Outcome replayed =
+      run("bench --replay " + out + "/recording.rtcdrec --seeds 1 --gimpact-host-steps 5 --no-plots --out " + again);
+  ASSERT_EQ(replayed.code, 0) << replayed.out;
+  EXPECT_TRUE(std::filesystem::exists(again + "/table_2_1.csv"));
+
+  const std::string junk = write("junk.rtcdrec", "RTCDREC1 and then nothing sensible");
+  for (const auto& [args, fragment] : std::vector<std::pair<std::string, std::string>>{
+           {"bench no_such_scene", "no such scene file"},
+           {"bench", "give a SCENE"},
+           {"bench avalanche --replay " + junk, "not both"},
+           {"bench --replay " + junk, "junk.rtcdrec"},
+           {"bench avalanche --seeds 0", "seeds"}}) {
+    const Outcome bad = run(args);
+    EXPECT_EQ(bad.code, 2) << args << "\n" << bad.out;
+    EXPECT_NE(bad.out.find(fragment), std::string::npos) << args << "\n" << bad.out;
+    EXPECT_EQ(std::count(bad.out.begin(), bad.out.end(), '\n'), 1) << args << "\n" << bad.out;
+  }
 }
 
 }  // namespace

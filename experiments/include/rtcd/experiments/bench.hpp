@@ -49,7 +49,7 @@ struct BenchOptions {
   uint64_t full_every = 0, peers_every = 0, judge_every = 0;
   uint32_t seeds = 3;  // simulations per interpenetration variant
   uint64_t gimpact_host_steps = 600;  // at most this many steps of the GIMPACT-hosted simulation
-  double budget_seconds = 300;        // per replayed configuration (ReplayConfig::budget_seconds)
+  double budget_seconds = 900;        // per replayed configuration (ReplayConfig::budget_seconds)
   // Stage name, done, total: for a progress bar.
   std::function<void(const std::string&, uint64_t, uint64_t)> progress;
 };
