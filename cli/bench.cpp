@@ -37,6 +37,7 @@ int run_bench(const BenchOptions& o) {
   b.judge_every = o.judge_every;
   b.gimpact_host_steps = o.gimpact_host_steps;
   b.seeds = o.seeds;
+  b.steps = o.steps;
   b.budget_seconds = o.budget_seconds;
   b.command = "Machine: " + machine() + ", " + std::to_string(std::thread::hardware_concurrency()) +
               " cores; build " RTCD_BUILD_TYPE "; command `" + o.command + "`.";

@@ -13,6 +13,7 @@ struct BenchOptions {
   uint64_t full_every = 0, peers_every = 0, judge_every = 0, gimpact_host_steps = 600;
   double budget_seconds = 900;
   uint32_t seeds = 3;
+  uint64_t steps = 0;  // 0: the scene's
   bool no_plots = false;
   std::string command;  // the command line as typed
 };

@@ -157,6 +157,8 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   bench->add_option("--budget", bo.budget_seconds, "Seconds a replayed configuration may take in all before it stops")
       ->check(CLI::Range(1.0, 1e9));
+  bench->add_option("--steps", bo.steps, "Simulate this many steps instead of the scene's duration")
+      ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   bench->add_option("--seeds", bo.seeds, "Seeds per interpenetration variant")->check(CLI::Range(1, 100));
   bench->add_flag("--no-plots", bo.no_plots, "Skip the PNG plots");
 

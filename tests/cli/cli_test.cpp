@@ -207,11 +207,11 @@ TEST(CliQuery, SizesOutsideTheSupportedRangeAreRefused) {
 
 namespace {
 
-// The small version of the stream scene through the whole bench, then its
+// The first second of the small stream through the whole bench, then its
 // recording replayed; bad bench inputs exit 2 with one line.
 TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   const std::string out = (dir_ / "bench").string();
-  const Outcome r = run("bench stream_small --seeds 1 --gimpact-host-steps 20 --no-plots --out " + out);
+  const Outcome r = run("bench stream_small --steps 60 --seeds 1 --gimpact-host-steps 20 --no-plots --out " + out);
   ASSERT_EQ(r.code, 0) << r.out;
   EXPECT_NE(r.out.find("report: "), std::string::npos) << r.out;
   std::ifstream report(out + "/report.md");
@@ -231,7 +231,8 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
            {"bench", "give a SCENE"},
            {"bench avalanche --replay " + junk, "not both"},
            {"bench --replay " + junk, "junk.rtcdrec"},
-           {"bench avalanche --seeds 0", "seeds"}}) {
+           {"bench avalanche --seeds 0", "seeds"},
+           {"bench avalanche --steps 0", "steps"}}) {
     const Outcome bad = run(args);
     EXPECT_EQ(bad.code, 2) << args << "\n" << bad.out;
     EXPECT_NE(bad.out.find(fragment), std::string::npos) << args << "\n" << bad.out;

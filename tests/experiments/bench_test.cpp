@@ -261,13 +261,13 @@ TEST(Motion, IsTheFastestBodysStep) {
   EXPECT_EQ(m.body, 0u);
 }
 
-// The whole bench on a tiny scene: every table is written.
+// The whole bench on the first 40 steps of the small avalanche: every table
+// is written.
 TEST(Bench, WritesEveryTable) {
   TempDir dir;
-  const std::string scene = (dir.path / "pile.json").string();
-  std::ofstream(scene) << kPile;
   experiments::BenchOptions o;
-  o.scene = scene;
+  o.scene = std::string(RTCD_DATA_DIR) + "/scenes/avalanche_small.json";
+  o.steps = 40;
   o.out = (dir.path / "out").string();
   o.seeds = 2;
   o.gimpact_host_steps = 20;
@@ -291,6 +291,11 @@ TEST(Bench, WritesEveryTable) {
   again.seeds = 1;
   EXPECT_NO_THROW(experiments::run_bench(again));
   EXPECT_FALSE(fs::exists(fs::path(again.out) / "recording.rtcdrec"));
+  std::ifstream steps(fs::path(again.out) / "host_steps.csv");
+  std::string line;
+  size_t rtcd_rows = 0;
+  while (std::getline(steps, line)) rtcd_rows += line.rfind("rtcd,", 0) == 0;
+  EXPECT_EQ(rtcd_rows, 20u);  // the host comparison covers the GIMPACT host's 20 steps
 }
 
 }  // namespace
