@@ -25,22 +25,13 @@ std::string scene_file(const std::string& name) {
 
 }  // namespace
 
-int run_bench(const BenchOptions& o) {
-  experiments::BenchOptions b;
-  if (o.replay.empty() == o.scene.empty()) throw UsageError("give a SCENE, or --replay FILE (not both)");
-  if (!o.scene.empty()) b.scene = scene_file(o.scene);
-  b.replay = o.replay;
-  const std::string name = o.scene.empty() ? fs::path(o.replay).stem().string() : fs::path(b.scene).stem().string();
-  b.out = o.out.empty() ? (fs::path("runs") / ("bench-" + name)).string() : o.out;
-  b.full_every = o.full_every;
-  b.peers_every = o.peers_every;
-  b.judge_every = o.judge_every;
-  b.gimpact_host_steps = o.gimpact_host_steps;
-  b.seeds = o.seeds;
-  b.steps = o.steps;
-  b.budget_seconds = o.budget_seconds;
+int run_bench(experiments::BenchOptions b, bool plots) {
+  if (b.replay.empty() == b.scene.empty()) throw UsageError("give a SCENE, or --replay FILE (not both)");
+  if (!b.scene.empty()) b.scene = scene_file(b.scene);
+  const std::string name = fs::path(b.scene.empty() ? b.replay : b.scene).stem().string();
+  if (b.out.empty()) b.out = (fs::path("runs") / ("bench-" + name)).string();
   b.command = "Machine: " + machine() + ", " + std::to_string(std::thread::hardware_concurrency()) +
-              " cores; build " RTCD_BUILD_TYPE "; command `" + o.command + "`.";
+              " cores; build " RTCD_BUILD_TYPE "; command `" + b.command + "`.";
   std::unique_ptr<Progress> bar;
   std::string stage;
   b.progress = [&](const std::string& s, uint64_t done, uint64_t total) {
@@ -51,7 +42,7 @@ int run_bench(const BenchOptions& o) {
     bar->update(done);
   };
   const std::string report = experiments::run_bench(b);
-  if (!o.no_plots) {
+  if (plots) {
     const std::string command = "/usr/bin/python3 '" + std::string(RTCD_BENCH_PLOT_SCRIPT) + "' '" + b.out + "'";
     if (std::system(command.c_str()) != 0)
       std::cerr << "rtcd: warning: the plots were not made (" << command << " failed; python3-matplotlib installed?)\n";

@@ -144,7 +144,8 @@ int main(int argc, char** argv) {
   run->add_option("--out", r.out, "Output folder (default: runs/<scene>-<timestamp>/)");
   run->add_flag("--no-plots", r.no_plots, "Skip the PNG plots");
 
-  rtcd::cli::BenchOptions bo;
+  rtcd::experiments::BenchOptions bo;
+  bool bench_no_plots = false;
   auto* bench = app.add_subcommand(
       "bench", "The thesis' experiments on a scene: record, replay through rtcd, GIMPACT and FCL, tables and plots");
   bench->add_option("SCENE", bo.scene, "avalanche, stream, their _small versions, or a scene file");
@@ -160,7 +161,7 @@ int main(int argc, char** argv) {
   bench->add_option("--steps", bo.steps, "Simulate this many steps instead of the scene's duration")
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   bench->add_option("--seeds", bo.seeds, "Seeds per interpenetration variant")->check(CLI::Range(1, 100));
-  bench->add_flag("--no-plots", bo.no_plots, "Skip the PNG plots");
+  bench->add_flag("--no-plots", bench_no_plots, "Skip the PNG plots");
 
   try {
     app.parse(argc, argv);
@@ -168,7 +169,7 @@ int main(int argc, char** argv) {
     if (*bench) {
       bo.command = "rtcd";
       for (int i = 1; i < argc; ++i) bo.command += std::string(" ") + argv[i];
-      return rtcd::cli::run_bench(bo);
+      return rtcd::cli::run_bench(bo, !bench_no_plots);
     }
     if (*run) {
       if (run_steps > 0) r.steps = run_steps;

@@ -131,7 +131,7 @@ struct Verdict {
   std::vector<std::array<std::vector<uint32_t>, 2>> deep;  // by pair index; [0] a's origins in b, [1] b's in a
 };
 
-Verdict judge_exact(const sim::RecordedFrame& frame, const std::vector<size_t>& body_shape, const Shapes& shapes,
+Verdict judge_exact(const sim::RecordedFrame& frame, const std::vector<size_t>& body_shape,
                     const std::vector<oracle::ExactShape>& exact, double epsilon_scale) {
   Verdict v;
   v.deep.resize(frame.pairs.size());
@@ -222,7 +222,7 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
     }
     const bool judge = options.judge_every > 0 && step % options.judge_every == 0;
     std::optional<Verdict> verdict;
-    if (judge) verdict = judge_exact(frame, body_shape, shapes, exact, options.epsilon_scale);
+    if (judge) verdict = judge_exact(frame, body_shape, exact, options.epsilon_scale);
     for (size_t i = 0; i < runners.size(); ++i) {
       if (step % configs[i].every != 0 || runs[i].stopped()) continue;
       if (configs[i].budget_seconds > 0 && spent[i] > configs[i].budget_seconds) {

@@ -208,14 +208,13 @@ void RecordingWriter::append(const Simulation& simulation) {
   for (double t : {s.seconds_broad, s.seconds_narrow, s.seconds_solver, s.seconds_effects, s.seconds_total}) put(out_, t);
   put_all(out_, std::vector<uint32_t>(kinds.begin() + std::ptrdiff_t(kinds_written_), kinds.end()));
   kinds_written_ = kinds.size();
-  std::vector<float> poses;
-  poses.reserve(7 * poses_.size());
+  packed_.clear();
   for (const Pose& p : poses_) {
     const Eigen::Quaterniond& q = p.orientation;
-    poses.insert(poses.end(), {float(p.position.x()), float(p.position.y()), float(p.position.z()), float(q.x()),
-                               float(q.y()), float(q.z()), float(q.w())});
+    packed_.insert(packed_.end(), {float(p.position.x()), float(p.position.y()), float(p.position.z()), float(q.x()),
+                                   float(q.y()), float(q.z()), float(q.w())});
   }
-  put_all(out_, poses);
+  put_all(out_, packed_);
   put_all(out_, left_);
   put_all(out_, joined_);
   if (!out_) throw RecordingError(path_ + ": write failed at step " + std::to_string(s.step));

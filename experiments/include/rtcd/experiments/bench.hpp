@@ -44,7 +44,7 @@ struct BenchOptions {
   std::string scene;   // a scene file
   std::string replay;  // a recording to replay instead of simulating anew
   std::string out;     // the output folder
-  std::string command; // the command line, written beside each table
+  std::string command; // where and how it ran (machine, build, command), atop the report
   uint64_t steps = 0;  // simulate this many steps instead of the scene's (0: the scene's)
   // Sampling (0: chosen from the step count, see docs/bench.md).
   uint64_t full_every = 0, peers_every = 0, judge_every = 0;

@@ -101,6 +101,7 @@ class RecordingWriter {
   size_t kinds_written_ = 0;
   std::vector<uint64_t> keys_, previous_, left_, joined_;
   std::vector<Pose> poses_;
+  std::vector<float> packed_;  // the step's poses as written
 };
 
 }  // namespace rtcd::sim
