@@ -47,7 +47,8 @@ class BasicTracerFactory final : public MeshTracerFactory {
 }  // namespace
 
 std::unique_ptr<NarrowPhase> make_basic_narrow_phase(const Config& config) {
-  return make_cpu_narrow_phase("basic", {"cpu (TBB)"}, std::make_unique<BasicTracerFactory>(), config);
+  return make_pipeline_narrow_phase("basic", {"cpu (TBB)"}, make_cpu_executor(std::make_unique<BasicTracerFactory>()),
+                                    config);
 }
 
 }  // namespace rtcd

@@ -100,7 +100,8 @@ class EmbreeTracerFactory final : public MeshTracerFactory {
 }  // namespace
 
 std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const Config& config) {
-  return make_cpu_narrow_phase("embree", {embree_description()}, std::make_unique<EmbreeTracerFactory>(), config);
+  return make_pipeline_narrow_phase("embree", {embree_description()},
+                                    make_cpu_executor(std::make_unique<EmbreeTracerFactory>()), config);
 }
 
 std::string embree_description() {

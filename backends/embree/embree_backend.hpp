@@ -1,7 +1,7 @@
 // Factory of the Embree 3 backend.
 #pragma once
 
-#include "rtcd/cpu_pipeline.hpp"
+#include "rtcd/cpu_executor.hpp"
 
 namespace rtcd {
 std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const Config& config);

@@ -1,14 +1,13 @@
-// The CPU narrow phase shared by the basic and Embree backends: pair state,
-// equation 2.1, candidate selection, the walk and the predictive logic run
-// here through the kernel code; a backend supplies only the full tracer.
+// The CPU executor shared by the basic and Embree backends: candidate
+// selection, the walk and the predictive logic run here through the kernel
+// code, parallel over jobs and rays with TBB; a backend supplies only the
+// full tracer.
 #pragma once
 
 #include <memory>
-#include <string>
-#include <vector>
 
 #include "rtcd/kernel/locate.h"
-#include "rtcd/narrow_phase.hpp"
+#include "rtcd/step_pipeline.hpp"
 
 namespace rtcd {
 
@@ -33,8 +32,6 @@ class MeshTracerFactory {
   virtual std::unique_ptr<MeshTracer> build(const Mesh& mesh) const = 0;
 };
 
-std::unique_ptr<NarrowPhase> make_cpu_narrow_phase(std::string name, std::vector<std::string> devices,
-                                                   std::unique_ptr<MeshTracerFactory> tracers,
-                                                   const Config& config);
+std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory> tracers);
 
 }  // namespace rtcd

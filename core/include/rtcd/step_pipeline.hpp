@@ -1,0 +1,69 @@
+// The step pipeline every backend runs on. The host side — pair state,
+// equation 2.1, the overlap boxes, depth refinement, contacts, pair summaries
+// and statistics — is written once here; a backend is a RayExecutor that
+// turns a batch of pair-directions into one outcome per candidate ray, where
+// its data lives (CPU threads now, devices later).
+#pragma once
+
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "rtcd/narrow_phase.hpp"
+
+namespace rtcd {
+
+// A ray the walk follows from one step to the next: the host's mirror of a
+// pair-direction's tracked rays, rebuilt from every step's outcomes, so any
+// executor can take over a pair without tracing it again.
+struct TrackedRay {
+  uint32_t vertex;
+  int32_t triangle;
+};
+
+// One direction of one pair: the source's rays against the target.
+struct RayJob {
+  ShapeId source = 0, target = 0;
+  // Source frame to target frame, in double: rays are cast in the target's
+  // local frame, where its acceleration structure lives and where bodies far
+  // from the world origin keep their relative precision.
+  Eigen::Matrix3d rotation = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d translation = Eigen::Vector3d::Zero();
+  // Candidate origins lie in this box (target frame); empty: no candidates.
+  Aabb overlap;
+  bool iterative = false;
+  // Iterative jobs: last step's rays, the walks' start triangles.
+  std::span<const TrackedRay> tracked;
+};
+
+// What one candidate ray found. `t` is the kernel's float distance; the host
+// refines reported rays in double.
+struct RayOutcome {
+  uint32_t vertex = 0;
+  int32_t triangle = -1;
+  float t = 0.0f;
+  uint32_t walk_steps = 0;   // iterative rays: triangles the walk located
+  uint8_t kind = 0;          // rtcd_ray_kind
+  uint8_t status = 0;        // rtcd_line_status (iterative rays and volumes)
+  uint8_t predictive_cast = 0;  // full rays: an outward predictive ray was traced too
+};
+
+class RayExecutor {
+ public:
+  virtual ~RayExecutor() = default;
+  // Called once per shape, in ShapeId order, before any job names it.
+  virtual void add_shape(std::shared_ptr<const Shape> shape) = 0;
+  // outcomes[j] receives job j's candidates in order: every origin with a
+  // direction inside the overlap box (full jobs, by vertex), or every tracked
+  // ray whose origin is inside it (iterative jobs, in tracked order); a ray
+  // that reports nothing has kind RTCD_RAY_DROPPED. The caller sizes
+  // `outcomes` to at least jobs.size(); the executor only clears and fills.
+  virtual void execute(std::span<const RayJob> jobs, const Config& config,
+                       std::span<std::vector<RayOutcome>> outcomes) = 0;
+};
+
+std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,
+                                                        std::unique_ptr<RayExecutor> executor, const Config& config);
+
+}  // namespace rtcd

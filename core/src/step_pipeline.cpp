@@ -1,0 +1,365 @@
+// The host side of every step, whatever executes the rays: validate the
+// pairs, keep each pair's state (equation 2.1, the tracked rays), build the
+// pair-directions, then turn the executor's outcomes into contacts,
+// predictive rays, pair summaries and statistics. Every buffer keeps its
+// capacity across steps, so a steady step allocates nothing.
+#include "rtcd/step_pipeline.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <unordered_map>
+
+#include "parallel.hpp"
+#include "rtcd/criterion.hpp"
+#include "rtcd/error.hpp"
+#include "rtcd/kernel/classify.h"
+
+namespace rtcd {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
+
+std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) + ", " + std::to_string(b) + ")"; }
+
+// Least outcomes (or pairs) worth gathering on several threads.
+constexpr size_t kParallelGather = 2048;
+
+// Distance along the ray to where it leaves the target through the face the
+// executor chose, in double precision: depths then agree across backends (and
+// with the exact reference) to far better than float. Mesh: the triangle's
+// plane; box: the face's plane; sphere: the far root (where the line leaves);
+// half-space: its plane.
+double refined_distance(const Shape& target, int32_t face, const Eigen::Vector3d& origin,
+                        const Eigen::Vector3d& direction) {
+  if (const Mesh* mesh = target.mesh()) {
+    const auto& tri = mesh->triangles()[face];
+    const Eigen::Vector3d a = mesh->positions()[tri[0]].cast<double>();
+    const Eigen::Vector3d n =
+        (mesh->positions()[tri[1]].cast<double>() - a).cross(mesh->positions()[tri[2]].cast<double>() - a);
+    return n.dot(a - origin) / n.dot(direction);
+  }
+  if (const auto* sphere = std::get_if<Sphere>(&target.geometry())) {
+    const double a = direction.squaredNorm(), b = origin.dot(direction);
+    const double c = origin.squaredNorm() - sphere->radius * sphere->radius;
+    return (-b + std::sqrt(std::max(b * b - a * c, 0.0))) / a;
+  }
+  if (std::holds_alternative<HalfSpace>(target.geometry())) return -origin.z() / direction.z();
+  const int axis = face / 2;
+  const double plane = (face % 2 == 0 ? 1.0 : -1.0) * std::get<Box>(target.geometry()).half_extents[axis];
+  return (plane - origin[axis]) / direction[axis];
+}
+
+// Outward unit normal of the face a ray leaves the target through, in the
+// target's frame; `exit` is where it leaves.
+Eigen::Vector3d exit_normal(const Shape& target, int32_t face, const Eigen::Vector3d& exit) {
+  if (const Mesh* m = target.mesh()) return m->triangle_normals()[face].cast<double>();
+  if (std::holds_alternative<Sphere>(target.geometry())) return exit.normalized();
+  if (std::holds_alternative<HalfSpace>(target.geometry())) return Eigen::Vector3d::UnitZ();
+  Eigen::Vector3d n = Eigen::Vector3d::Zero();
+  n[face / 2] = face % 2 == 0 ? 1.0 : -1.0;
+  return n;
+}
+
+// Counts of one pair's outcomes: its ranges in the step's output and its
+// share of the statistics.
+struct PairTally {
+  size_t contacts = 0, predictive = 0;
+  size_t candidates = 0, rays_full = 0, rays_predictive = 0, rays_iterative = 0, walk_steps = 0;
+  std::array<size_t, RTCD_LINE_STATUS_COUNT> endings{};
+
+  void count(const RayOutcome& o, bool iterative) {
+    ++candidates;
+    contacts += o.kind == RTCD_RAY_PENETRATING;
+    predictive += o.kind == RTCD_RAY_PREDICTIVE;
+    if (iterative) {
+      ++rays_iterative;
+      walk_steps += o.walk_steps;
+      ++endings[o.status];
+    } else {
+      ++rays_full;
+      rays_predictive += o.predictive_cast;
+    }
+  }
+};
+
+class PipelineNarrowPhase final : public NarrowPhase {
+ public:
+  PipelineNarrowPhase(std::string name, std::vector<std::string> devices, std::unique_ptr<RayExecutor> executor,
+                      const Config& config)
+      : NarrowPhase(config), name_(std::move(name)), devices_(std::move(devices)), executor_(std::move(executor)) {}
+
+  std::string name() const override { return name_; }
+  std::vector<std::string> devices() const override { return devices_; }
+
+  ShapeId add_shape(std::shared_ptr<const Shape> shape) override {
+    if (!shape) throw UsageError("add_shape: null shape");
+    executor_->add_shape(shape);
+    shapes_.push_back(std::move(shape));
+    return ShapeId(shapes_.size() - 1);
+  }
+
+  BodyId add_body(ShapeId shape, const Pose& pose) override {
+    if (shape >= shapes_.size()) throw UsageError("add_body: unknown shape " + std::to_string(shape));
+    bodies_.push_back({shape, checked(pose), true});
+    return BodyId(bodies_.size() - 1);
+  }
+
+  void remove_body(BodyId body) override {
+    body_at(body).alive = false;
+    std::erase_if(states_, [body](const auto& kv) {
+      return BodyId(kv.first >> 32) == body || BodyId(kv.first & 0xffffffffu) == body;
+    });
+  }
+
+  void set_pose(BodyId body, const Pose& pose) override { body_at(body).pose = checked(pose); }
+
+  using NarrowPhase::detect;
+  void detect(std::span<const BodyPair> pairs, StepResult& out) override;
+
+ private:
+  struct Body {
+    ShapeId shape;
+    Pose pose;
+    bool alive;
+  };
+  struct PairState {
+    Pose relative_at_full;               // lower id's frame in the higher id's frame
+    std::vector<TrackedRay> tracked[2];  // [0]: lower id's rays into the higher, [1]: the reverse
+    uint64_t step = 0;                   // last step the pair was asked for
+  };
+  // Where a pair's two jobs are: jobs_[list][first] (a's rays), [first + 1] (b's).
+  struct PairWork {
+    PairState* state;
+    uint32_t list, first;
+    PairTally tally;
+  };
+
+  Body& body_at(BodyId id) {
+    if (id >= bodies_.size() || !bodies_[id].alive) throw UsageError("unknown body " + std::to_string(id));
+    return bodies_[id];
+  }
+  void validate(std::span<const BodyPair> pairs);
+  void prepare(std::span<const BodyPair> pairs, StepResult& out);
+  void place(RayJob& job, BodyId source, BodyId target) const;
+  void gather(std::span<const BodyPair> pairs, StepResult& out);
+  void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
+            Contact*& contacts, PredictiveRay*& predictive, std::vector<TrackedRay>& tracked) const;
+
+  std::string name_;
+  std::vector<std::string> devices_;
+  std::unique_ptr<RayExecutor> executor_;
+  std::vector<std::shared_ptr<const Shape>> shapes_;
+  std::vector<Body> bodies_;
+  std::unordered_map<uint64_t, PairState> states_;
+  uint64_t step_ = 0;
+  // Per-step buffers, kept across steps. Lists: [0] full jobs, [1] iterative.
+  std::vector<uint64_t> keys_;
+  std::vector<RayJob> jobs_[2];
+  std::vector<std::vector<RayOutcome>> outcomes_[2];
+  std::vector<PairWork> work_;
+};
+
+void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
+  keys_.clear();
+  for (const BodyPair& p : pairs) {
+    body_at(p.a);
+    body_at(p.b);
+    if (p.a == p.b) throw UsageError(pair_text(p.a, p.b) + " is one body");
+    keys_.push_back(pair_key(p.a, p.b));
+  }
+  std::sort(keys_.begin(), keys_.end());
+  const auto twice = std::adjacent_find(keys_.begin(), keys_.end());
+  if (twice != keys_.end())
+    throw UsageError(pair_text(BodyId(*twice >> 32), BodyId(*twice & 0xffffffffu)) + " appears twice in one step");
+}
+
+void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& out) {
+  const auto t0 = Clock::now();
+  validate(pairs);  // before anything changes: bad input loses no state
+  out.stats = {};
+  prepare(pairs, out);
+  out.stats.seconds_prepare = seconds_since(t0);
+
+  for (uint32_t list : {0u, 1u}) {
+    const auto t = Clock::now();
+    if (outcomes_[list].size() < jobs_[list].size()) outcomes_[list].resize(jobs_[list].size());
+    executor_->execute(jobs_[list], config_, outcomes_[list]);
+    (list == 1 ? out.stats.seconds_iterative : out.stats.seconds_full) = seconds_since(t);
+  }
+
+  const auto t = Clock::now();
+  gather(pairs, out);
+  out.stats.seconds_gather = seconds_since(t);
+}
+
+// Pair state and mode per pair (serial: the state map), then each job's
+// transform and overlap box (parallel).
+void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& out) {
+  ++step_;
+  jobs_[0].clear();
+  jobs_[1].clear();
+  work_.resize(pairs.size());
+  out.pairs.resize(pairs.size());
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const BodyPair p = pairs[i];
+    const BodyId lo = std::min(p.a, p.b), hi = std::max(p.a, p.b);
+    const Pose relative = bodies_[hi].pose.inverse() * bodies_[lo].pose;
+    auto [it, fresh] = states_.try_emplace(pair_key(lo, hi));
+    PairState& state = it->second;
+    state.step = step_;
+    bool iterative = false;
+    if (!fresh && config_.mode == Mode::iterative) {
+      iterative = true;
+    } else if (!fresh && config_.mode == Mode::automatic) {
+      const double radius = std::max(shapes_[bodies_[lo].shape]->radius(), shapes_[bodies_[hi].shape]->radius());
+      iterative = max_displacement(state.relative_at_full, relative, radius) <= config_.displacement_threshold;
+      if (!iterative) ++out.stats.fallbacks_to_full;
+    }
+    if (!iterative) {
+      state.relative_at_full = relative;
+      state.tracked[0].clear();
+      state.tracked[1].clear();
+    }
+    PairResult& pr = out.pairs[i];
+    pr = PairResult{};
+    pr.pair = p;
+    pr.mode = iterative ? PairMode::iterative : PairMode::full;
+    ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
+    const uint32_t list = iterative ? 1 : 0;
+    work_[i] = {&state, list, uint32_t(jobs_[list].size()), {}};
+    for (const BodyId source : {p.a, p.b}) {
+      RayJob& job = jobs_[list].emplace_back();
+      job.source = bodies_[source].shape;
+      job.target = bodies_[source == p.a ? p.b : p.a].shape;
+      job.iterative = iterative;
+      job.tracked = state.tracked[source == lo ? 0 : 1];
+    }
+  }
+  std::erase_if(states_, [this](const auto& kv) { return kv.second.step != step_; });
+
+  for_each_index(pairs.size(), pairs.size() >= kParallelGather / 8, [&](size_t i) {
+    const PairWork& w = work_[i];
+    place(jobs_[w.list][w.first], pairs[i].a, pairs[i].b);
+    place(jobs_[w.list][w.first + 1], pairs[i].b, pairs[i].a);
+  });
+}
+
+void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const {
+  const Body& src = bodies_[source];
+  const Body& dst = bodies_[target];
+  const Pose to_target = dst.pose.inverse() * src.pose;
+  job.rotation = to_target.orientation.toRotationMatrix();
+  job.translation = to_target.position;
+  job.overlap = shapes_[dst.shape]
+                    ->bounds()
+                    .intersection(shapes_[src.shape]->bounds().transformed(to_target))
+                    .grown(config_.distance_extension);
+}
+
+// Ranges per pair in input order (a's rays, then b's), then every record
+// filled in parallel and the tracked rays mirrored from the outcomes.
+void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& out) {
+  size_t outcomes = 0;
+  for (uint32_t list : {0u, 1u})
+    for (size_t j = 0; j < jobs_[list].size(); ++j) outcomes += outcomes_[list][j].size();
+  const bool parallel = outcomes >= kParallelGather;
+
+  for_each_index(pairs.size(), parallel, [&](size_t i) {
+    PairWork& w = work_[i];
+    w.tally = {};
+    for (uint32_t k = 0; k < 2; ++k)
+      for (const RayOutcome& o : outcomes_[w.list][w.first + k]) w.tally.count(o, w.list == 1);
+  });
+
+  size_t contacts = 0, predictive = 0;
+  StepStats& s = out.stats;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const PairTally& t = work_[i].tally;
+    PairResult& pr = out.pairs[i];
+    pr.first_contact = contacts;
+    pr.contact_count = t.contacts;
+    pr.first_predictive = predictive;
+    pr.predictive_count = t.predictive;
+    pr.colliding = t.contacts > 0;
+    contacts += t.contacts;
+    predictive += t.predictive;
+    s.candidates += t.candidates;
+    s.rays_full += t.rays_full;
+    s.rays_predictive += t.rays_predictive;
+    s.rays_iterative += t.rays_iterative;
+    s.walk_steps += t.walk_steps;
+    for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) s.walk_endings[e] += t.endings[e];
+  }
+  out.contacts.resize(contacts);
+  out.predictive.resize(predictive);
+
+  for_each_index(pairs.size(), parallel, [&](size_t i) {
+    const PairWork& w = work_[i];
+    const BodyPair p = pairs[i];
+    PairResult& pr = out.pairs[i];
+    Contact* contact = out.contacts.data() + pr.first_contact;
+    PredictiveRay* ahead = out.predictive.data() + pr.first_predictive;
+    for (uint32_t k = 0; k < 2; ++k) {
+      const BodyId source = k == 0 ? p.a : p.b, target = k == 0 ? p.b : p.a;
+      fill(jobs_[w.list][w.first + k], outcomes_[w.list][w.first + k], source, target, k == 0 ? Side::a : Side::b,
+           contact, ahead, w.state->tracked[source < target ? 0 : 1]);
+    }
+    for (const Contact& contact : out.contacts_of(pr)) pr.max_depth = std::max(pr.max_depth, contact.depth);
+  });
+}
+
+void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source_id,
+                               BodyId target_id, Side side, Contact*& contacts, PredictiveRay*& predictive,
+                               std::vector<TrackedRay>& tracked) const {
+  const Body& src = bodies_[source_id];
+  const Body& dst = bodies_[target_id];
+  const Shape& source = *shapes_[src.shape];
+  const Shape& target = *shapes_[dst.shape];
+  tracked.clear();
+  for (const RayOutcome& o : outcomes) {
+    if (o.kind == RTCD_RAY_DROPPED) continue;
+    tracked.push_back({o.vertex, o.triangle});
+    const Eigen::Vector3d origin = source.sources().origins[o.vertex].cast<double>();
+    const Eigen::Vector3d direction = source.sources().directions[o.vertex].cast<double>();
+    // In the target's frame: keep the executor's decision, sharpen the distance.
+    const Eigen::Vector3d p = job.rotation * origin + job.translation;
+    const Eigen::Vector3d d = job.rotation * direction;
+    const double refined = refined_distance(target, o.triangle, p, d);
+    const double t = o.kind == RTCD_RAY_PENETRATING ? std::max(refined, 0.0) : std::min(refined, 0.0);
+    RayRecord r;
+    r.source = side;
+    r.source_body = source_id;
+    r.target_body = target_id;
+    r.vertex = o.vertex;
+    r.triangle = o.triangle;
+    r.origin = src.pose.apply(origin);
+    r.direction = (src.pose.orientation * direction).normalized();
+    r.normal = (dst.pose.orientation * exit_normal(target, o.triangle, p + t * d)).normalized();
+    if (o.kind == RTCD_RAY_PENETRATING) {
+      Contact& c = *contacts++;
+      static_cast<RayRecord&>(c) = r;
+      c.depth = t;
+      c.projected_depth = c.depth * std::abs(r.direction.dot(r.normal));
+      c.push = config_.projected ? Eigen::Vector3d(r.normal * c.projected_depth) : Eigen::Vector3d(r.direction * c.depth);
+    } else {
+      PredictiveRay& q = *predictive++;
+      static_cast<RayRecord&>(q) = r;
+      q.distance = -t;
+    }
+  }
+}
+
+}  // namespace
+
+std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,
+                                                        std::unique_ptr<RayExecutor> executor, const Config& config) {
+  if (!executor) throw UsageError("make_pipeline_narrow_phase: null executor");
+  return std::make_unique<PipelineNarrowPhase>(std::move(name), std::move(devices), std::move(executor), config);
+}
+
+}  // namespace rtcd
