@@ -57,6 +57,7 @@ void run(benchmark::State& state, const std::string& backend, Mode mode) {
   Scene s = make_scene(backend, mode, int(state.range(0)));
   s.narrow->detect(s.pairs);  // the first, full step
   size_t rays = 0, steps = 0, contacts = 0, walk_steps = 0;
+  double prepare = 0, trace = 0, gather = 0;
   StepResult r;  // reused: a host keeps its result buffers across steps
   for (auto _ : state) {
     const double jitter = (steps % 2 ? 1e-3 : 0.0);
@@ -69,9 +70,17 @@ void run(benchmark::State& state, const std::string& backend, Mode mode) {
     rays += r.stats.rays_full + r.stats.rays_predictive + r.stats.rays_iterative;
     contacts += r.contacts.size();
     walk_steps += r.stats.walk_steps;
+    prepare += r.stats.seconds_prepare;
+    trace += r.stats.seconds_full + r.stats.seconds_iterative;
+    gather += r.stats.seconds_gather;
     ++steps;
   }
   state.counters["rays/s"] = benchmark::Counter(double(rays), benchmark::Counter::kIsRate);
+  // Rays per second of the ray stage alone (tracing or walking), beside the whole step's.
+  state.counters["ray stage rays/s"] = double(rays) / trace;
+  state.counters["prepare us"] = 1e6 * prepare / double(steps);
+  state.counters["rays us"] = 1e6 * trace / double(steps);
+  state.counters["gather us"] = 1e6 * gather / double(steps);
   state.counters["rays/step"] = double(rays) / double(steps);
   state.counters["contacts/step"] = double(contacts) / double(steps);
   if (mode == Mode::iterative) state.counters["walk steps/ray"] = double(walk_steps) / double(rays);

@@ -40,6 +40,18 @@ class CpuExecutor final : public RayExecutor {
     if (candidates_.size() < jobs.size()) candidates_.resize(jobs.size());
     size_t work = 0;
     for (const RayJob& job : jobs) work += job.iterative ? job.tracked.size() : shapes_[job.source]->sources().origins.size();
+    const bool walks = !jobs.empty() && jobs.front().iterative;  // the pipeline never mixes modes in a batch
+    if (walks) {
+      // Walks are short and even: one pass per job, candidates walked as found.
+      for_each_index(jobs.size(), work >= kParallelWalks, [&](size_t j) {
+        select(jobs[j], candidates_[j]);
+        outcomes[j].resize(candidates_[j].size());
+        for (size_t k = 0; k < candidates_[j].size(); ++k) outcomes[j][k] = trace(jobs[j], candidates_[j][k], config);
+      });
+      return;
+    }
+    // Traced rays cost far more and vary: select per job, then spread the
+    // batch's rays over threads in fixed chunks.
     for_each_index(jobs.size(), work >= kParallelWalks, [&](size_t j) {
       select(jobs[j], candidates_[j]);
       outcomes[j].resize(candidates_[j].size());
@@ -51,8 +63,7 @@ class CpuExecutor final : public RayExecutor {
       for (uint32_t begin = 0; begin < n; begin += kChunk) chunks_.push_back({j, begin, std::min<uint32_t>(n, begin + kChunk)});
       rays += n;
     }
-    const bool walks = !jobs.empty() && jobs.front().iterative;  // the pipeline never mixes modes in a batch
-    for_each_index(chunks_.size(), rays >= (walks ? kParallelWalks : kParallelTraces), [&](size_t c) {
+    for_each_index(chunks_.size(), rays >= kParallelTraces, [&](size_t c) {
       const Chunk& chunk = chunks_[c];
       const RayJob& job = jobs[chunk.job];
       for (uint32_t k = chunk.begin; k < chunk.end; ++k)

@@ -25,11 +25,14 @@ Pose checked(const Pose& pose) {
 }
 
 Aabb Aabb::transformed(const Pose& pose) const {
+  return transformed(pose.orientation.toRotationMatrix(), pose.position);
+}
+
+Aabb Aabb::transformed(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) const {
   const Eigen::Vector3d center = 0.5 * (min + max);
   const Eigen::Vector3d half = 0.5 * (max - min);
-  const Eigen::Matrix3d r = pose.orientation.toRotationMatrix().cwiseAbs();
-  const Eigen::Vector3d c = pose.apply(center);
-  const Eigen::Vector3d h = r * half;
+  const Eigen::Vector3d c = rotation * center + translation;
+  const Eigen::Vector3d h = rotation.cwiseAbs() * half;
   return {c - h, c + h};
 }
 

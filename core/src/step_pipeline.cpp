@@ -18,52 +18,73 @@ namespace rtcd {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
 
 std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) + ", " + std::to_string(b) + ")"; }
 
-// Least outcomes (or pairs) worth gathering on several threads.
-constexpr size_t kParallelGather = 2048;
+// Least outcomes worth counting, and worth turning into records, on several
+// threads: counting is a few additions per outcome, a record dozens of flops.
+constexpr size_t kParallelCount = 16384;
+constexpr size_t kParallelFill = 512;
 
-// Distance along the ray to where it leaves the target through the face the
-// executor chose, in double precision: depths then agree across backends (and
-// with the exact reference) to far better than float. Mesh: the triangle's
-// plane; box: the face's plane; sphere: the far root (where the line leaves);
-// half-space: its plane.
-double refined_distance(const Shape& target, int32_t face, const Eigen::Vector3d& origin,
-                        const Eigen::Vector3d& direction) {
-  if (const Mesh* mesh = target.mesh()) {
-    const auto& tri = mesh->triangles()[face];
-    const Eigen::Vector3d a = mesh->positions()[tri[0]].cast<double>();
-    const Eigen::Vector3d n =
-        (mesh->positions()[tri[1]].cast<double>() - a).cross(mesh->positions()[tri[2]].cast<double>() - a);
-    return n.dot(a - origin) / n.dot(direction);
-  }
-  if (const auto* sphere = std::get_if<Sphere>(&target.geometry())) {
-    const double a = direction.squaredNorm(), b = origin.dot(direction);
-    const double c = origin.squaredNorm() - sphere->radius * sphere->radius;
-    return (-b + std::sqrt(std::max(b * b - a * c, 0.0))) / a;
-  }
-  if (std::holds_alternative<HalfSpace>(target.geometry())) return -origin.z() / direction.z();
-  const int axis = face / 2;
-  const double plane = (face % 2 == 0 ? 1.0 : -1.0) * std::get<Box>(target.geometry()).half_extents[axis];
-  return (plane - origin[axis]) / direction[axis];
-}
+// A shape as the host builds records from it: what the refinement and the
+// records need, converted to double once instead of at every ray.
+struct ShapeEntry {
+  std::shared_ptr<const Shape> shape;
+  std::vector<Eigen::Vector3d> directions;  // unit ray directions (zero where a vertex has no normal)
+  std::vector<Eigen::Vector3d> normals;     // meshes: unit outward normal per triangle
+  struct Plane {
+    Eigen::Vector3d normal, point;  // meshes: (v1 - v0) x (v2 - v0) and v0, per triangle
+  };
+  std::vector<Plane> planes;
 
-// Outward unit normal of the face a ray leaves the target through, in the
-// target's frame; `exit` is where it leaves.
-Eigen::Vector3d exit_normal(const Shape& target, int32_t face, const Eigen::Vector3d& exit) {
-  if (const Mesh* m = target.mesh()) return m->triangle_normals()[face].cast<double>();
-  if (std::holds_alternative<Sphere>(target.geometry())) return exit.normalized();
-  if (std::holds_alternative<HalfSpace>(target.geometry())) return Eigen::Vector3d::UnitZ();
-  Eigen::Vector3d n = Eigen::Vector3d::Zero();
-  n[face / 2] = face % 2 == 0 ? 1.0 : -1.0;
-  return n;
-}
+  explicit ShapeEntry(std::shared_ptr<const Shape> s) : shape(std::move(s)) {
+    for (const Eigen::Vector3f& d : shape->sources().directions)
+      directions.push_back(d.isZero() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(d.cast<double>().normalized()));
+    if (const Mesh* m = shape->mesh()) {
+      for (size_t i = 0; i < m->triangle_count(); ++i) {
+        const auto& tri = m->triangles()[i];
+        const Eigen::Vector3d a = m->positions()[tri[0]].cast<double>();
+        planes.push_back({(m->positions()[tri[1]].cast<double>() - a).cross(m->positions()[tri[2]].cast<double>() - a), a});
+        const Eigen::Vector3d n = m->triangle_normals()[i].cast<double>();
+        normals.push_back(n.isZero() ? n : n.normalized());
+      }
+    }
+  }
+
+  // Distance along the ray to where it leaves this shape through the face
+  // the executor chose, in double precision: depths then agree across
+  // backends (and with the exact reference) to far better than float. Mesh:
+  // the triangle's plane; box: the face's plane; sphere: the far root (where
+  // the line leaves); half-space: its plane.
+  double exit_distance(int32_t face, const Eigen::Vector3d& origin, const Eigen::Vector3d& direction) const {
+    if (!planes.empty()) {
+      const Plane& plane = planes[face];
+      return plane.normal.dot(plane.point - origin) / plane.normal.dot(direction);
+    }
+    if (const auto* sphere = std::get_if<Sphere>(&shape->geometry())) {
+      const double a = direction.squaredNorm(), b = origin.dot(direction);
+      const double c = origin.squaredNorm() - sphere->radius * sphere->radius;
+      return (-b + std::sqrt(std::max(b * b - a * c, 0.0))) / a;
+    }
+    if (std::holds_alternative<HalfSpace>(shape->geometry())) return -origin.z() / direction.z();
+    const int axis = face / 2;
+    const double plane = (face % 2 == 0 ? 1.0 : -1.0) * std::get<Box>(shape->geometry()).half_extents[axis];
+    return (plane - origin[axis]) / direction[axis];
+  }
+
+  // Outward unit normal of the face a ray leaves through, in this shape's
+  // frame; `exit` is where it leaves.
+  Eigen::Vector3d exit_normal(int32_t face, const Eigen::Vector3d& exit) const {
+    if (!normals.empty()) return normals[face];
+    if (std::holds_alternative<Sphere>(shape->geometry())) return exit.normalized();
+    if (std::holds_alternative<HalfSpace>(shape->geometry())) return Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    n[face / 2] = face % 2 == 0 ? 1.0 : -1.0;
+    return n;
+  }
+};
 
 // Counts of one pair's outcomes: its ranges in the step's output and its
 // share of the statistics.
@@ -99,7 +120,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   ShapeId add_shape(std::shared_ptr<const Shape> shape) override {
     if (!shape) throw UsageError("add_shape: null shape");
     executor_->add_shape(shape);
-    shapes_.push_back(std::move(shape));
+    shapes_.emplace_back(std::move(shape));
     return ShapeId(shapes_.size() - 1);
   }
 
@@ -145,7 +166,6 @@ class PipelineNarrowPhase final : public NarrowPhase {
   }
   void validate(std::span<const BodyPair> pairs);
   void prepare(std::span<const BodyPair> pairs, StepResult& out);
-  void place(RayJob& job, BodyId source, BodyId target) const;
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive, std::vector<TrackedRay>& tracked) const;
@@ -153,7 +173,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::string name_;
   std::vector<std::string> devices_;
   std::unique_ptr<RayExecutor> executor_;
-  std::vector<std::shared_ptr<const Shape>> shapes_;
+  std::vector<ShapeEntry> shapes_;
   std::vector<Body> bodies_;
   std::unordered_map<uint64_t, PairState> states_;
   uint64_t step_ = 0;
@@ -179,26 +199,28 @@ void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
 }
 
 void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& out) {
-  const auto t0 = Clock::now();
+  // One clock reading per stage boundary: on some machines a reading costs
+  // as much as a walk.
+  auto lap = [last = Clock::now()]() mutable {
+    const auto now = Clock::now();
+    const double seconds = std::chrono::duration<double>(now - last).count();
+    last = now;
+    return seconds;
+  };
   validate(pairs);  // before anything changes: bad input loses no state
   out.stats = {};
   prepare(pairs, out);
-  out.stats.seconds_prepare = seconds_since(t0);
-
+  out.stats.seconds_prepare = lap();
   for (uint32_t list : {0u, 1u}) {
-    const auto t = Clock::now();
     if (outcomes_[list].size() < jobs_[list].size()) outcomes_[list].resize(jobs_[list].size());
     executor_->execute(jobs_[list], config_, outcomes_[list]);
-    (list == 1 ? out.stats.seconds_iterative : out.stats.seconds_full) = seconds_since(t);
+    (list == 1 ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
   }
-
-  const auto t = Clock::now();
   gather(pairs, out);
-  out.stats.seconds_gather = seconds_since(t);
+  out.stats.seconds_gather = lap();
 }
 
-// Pair state and mode per pair (serial: the state map), then each job's
-// transform and overlap box (parallel).
+// Pair state, mode and both jobs per pair.
 void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& out) {
   ++step_;
   jobs_[0].clear();
@@ -216,7 +238,7 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     if (!fresh && config_.mode == Mode::iterative) {
       iterative = true;
     } else if (!fresh && config_.mode == Mode::automatic) {
-      const double radius = std::max(shapes_[bodies_[lo].shape]->radius(), shapes_[bodies_[hi].shape]->radius());
+      const double radius = std::max(shapes_[bodies_[lo].shape].shape->radius(), shapes_[bodies_[hi].shape].shape->radius());
       iterative = max_displacement(state.relative_at_full, relative, radius) <= config_.displacement_threshold;
       if (!iterative) ++out.stats.fallbacks_to_full;
     }
@@ -232,33 +254,26 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
     const uint32_t list = iterative ? 1 : 0;
     work_[i] = {&state, list, uint32_t(jobs_[list].size()), {}};
+    // Both directions from the one relative transform: lower id's frame into
+    // the higher's, and its inverse.
+    const Eigen::Matrix3d rotation = relative.orientation.toRotationMatrix();
+    const Eigen::Matrix3d inverse = rotation.transpose();
     for (const BodyId source : {p.a, p.b}) {
+      const BodyId target = source == p.a ? p.b : p.a;
       RayJob& job = jobs_[list].emplace_back();
       job.source = bodies_[source].shape;
-      job.target = bodies_[source == p.a ? p.b : p.a].shape;
+      job.target = bodies_[target].shape;
+      job.rotation = source == lo ? rotation : inverse;
+      job.translation = source == lo ? relative.position : Eigen::Vector3d(-(inverse * relative.position));
+      job.overlap = shapes_[job.target]
+                        .shape->bounds()
+                        .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))
+                        .grown(config_.distance_extension);
       job.iterative = iterative;
       job.tracked = state.tracked[source == lo ? 0 : 1];
     }
   }
   std::erase_if(states_, [this](const auto& kv) { return kv.second.step != step_; });
-
-  for_each_index(pairs.size(), pairs.size() >= kParallelGather / 8, [&](size_t i) {
-    const PairWork& w = work_[i];
-    place(jobs_[w.list][w.first], pairs[i].a, pairs[i].b);
-    place(jobs_[w.list][w.first + 1], pairs[i].b, pairs[i].a);
-  });
-}
-
-void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const {
-  const Body& src = bodies_[source];
-  const Body& dst = bodies_[target];
-  const Pose to_target = dst.pose.inverse() * src.pose;
-  job.rotation = to_target.orientation.toRotationMatrix();
-  job.translation = to_target.position;
-  job.overlap = shapes_[dst.shape]
-                    ->bounds()
-                    .intersection(shapes_[src.shape]->bounds().transformed(to_target))
-                    .grown(config_.distance_extension);
 }
 
 // Ranges per pair in input order (a's rays, then b's), then every record
@@ -267,9 +282,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
   size_t outcomes = 0;
   for (uint32_t list : {0u, 1u})
     for (size_t j = 0; j < jobs_[list].size(); ++j) outcomes += outcomes_[list][j].size();
-  const bool parallel = outcomes >= kParallelGather;
-
-  for_each_index(pairs.size(), parallel, [&](size_t i) {
+  for_each_index(pairs.size(), outcomes >= kParallelCount, [&](size_t i) {
     PairWork& w = work_[i];
     w.tally = {};
     for (uint32_t k = 0; k < 2; ++k)
@@ -298,7 +311,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
   out.contacts.resize(contacts);
   out.predictive.resize(predictive);
 
-  for_each_index(pairs.size(), parallel, [&](size_t i) {
+  for_each_index(pairs.size(), outcomes >= kParallelFill, [&](size_t i) {
     const PairWork& w = work_[i];
     const BodyPair p = pairs[i];
     PairResult& pr = out.pairs[i];
@@ -318,38 +331,39 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
                                std::vector<TrackedRay>& tracked) const {
   const Body& src = bodies_[source_id];
   const Body& dst = bodies_[target_id];
-  const Shape& source = *shapes_[src.shape];
-  const Shape& target = *shapes_[dst.shape];
+  const ShapeEntry& source = shapes_[src.shape];
+  const ShapeEntry& target = shapes_[dst.shape];
+  const Eigen::Matrix3d source_rotation = src.pose.orientation.toRotationMatrix();
+  const Eigen::Matrix3d target_rotation = dst.pose.orientation.toRotationMatrix();
   tracked.clear();
   for (const RayOutcome& o : outcomes) {
     if (o.kind == RTCD_RAY_DROPPED) continue;
     tracked.push_back({o.vertex, o.triangle});
-    const Eigen::Vector3d origin = source.sources().origins[o.vertex].cast<double>();
-    const Eigen::Vector3d direction = source.sources().directions[o.vertex].cast<double>();
+    const Eigen::Vector3d origin = source.shape->sources().origins[o.vertex].cast<double>();
+    const Eigen::Vector3d& direction = source.directions[o.vertex];
     // In the target's frame: keep the executor's decision, sharpen the distance.
     const Eigen::Vector3d p = job.rotation * origin + job.translation;
     const Eigen::Vector3d d = job.rotation * direction;
-    const double refined = refined_distance(target, o.triangle, p, d);
+    const double refined = target.exit_distance(o.triangle, p, d);
     const double t = o.kind == RTCD_RAY_PENETRATING ? std::max(refined, 0.0) : std::min(refined, 0.0);
-    RayRecord r;
+    const bool penetrating = o.kind == RTCD_RAY_PENETRATING;
+    RayRecord& r = penetrating ? static_cast<RayRecord&>(*contacts) : static_cast<RayRecord&>(*predictive);
     r.source = side;
     r.source_body = source_id;
     r.target_body = target_id;
     r.vertex = o.vertex;
     r.triangle = o.triangle;
-    r.origin = src.pose.apply(origin);
-    r.direction = (src.pose.orientation * direction).normalized();
-    r.normal = (dst.pose.orientation * exit_normal(target, o.triangle, p + t * d)).normalized();
-    if (o.kind == RTCD_RAY_PENETRATING) {
+    r.origin = source_rotation * origin + src.pose.position;
+    // Rotations of unit vectors: unit to double precision.
+    r.direction = source_rotation * direction;
+    r.normal = target_rotation * target.exit_normal(o.triangle, p + t * d);
+    if (penetrating) {
       Contact& c = *contacts++;
-      static_cast<RayRecord&>(c) = r;
       c.depth = t;
-      c.projected_depth = c.depth * std::abs(r.direction.dot(r.normal));
-      c.push = config_.projected ? Eigen::Vector3d(r.normal * c.projected_depth) : Eigen::Vector3d(r.direction * c.depth);
+      c.projected_depth = t * std::abs(r.direction.dot(r.normal));
+      c.push = config_.projected ? Eigen::Vector3d(r.normal * c.projected_depth) : Eigen::Vector3d(r.direction * t);
     } else {
-      PredictiveRay& q = *predictive++;
-      static_cast<RayRecord&>(q) = r;
-      q.distance = -t;
+      (predictive++)->distance = -t;
     }
   }
 }

@@ -44,6 +44,7 @@ struct Aabb {
   Aabb intersection(const Aabb& other) const { return {min.cwiseMax(other.min), max.cwiseMin(other.max)}; }
   // The axis-aligned box around this box placed by `pose`.
   Aabb transformed(const Pose& pose) const;
+  Aabb transformed(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) const;
 };
 
 }  // namespace rtcd
