@@ -254,17 +254,16 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
     const uint32_t list = iterative ? 1 : 0;
     work_[i] = {&state, list, uint32_t(jobs_[list].size()), {}};
-    // Both directions from the one relative transform: lower id's frame into
-    // the higher's, and its inverse.
-    const Eigen::Matrix3d rotation = relative.orientation.toRotationMatrix();
-    const Eigen::Matrix3d inverse = rotation.transpose();
     for (const BodyId source : {p.a, p.b}) {
       const BodyId target = source == p.a ? p.b : p.a;
+      // Each direction from the two poses, not one from the other's inverse:
+      // numbering the bodies the other way round then changes no bit.
+      const Pose to_target = bodies_[target].pose.inverse() * bodies_[source].pose;
       RayJob& job = jobs_[list].emplace_back();
       job.source = bodies_[source].shape;
       job.target = bodies_[target].shape;
-      job.rotation = source == lo ? rotation : inverse;
-      job.translation = source == lo ? relative.position : Eigen::Vector3d(-(inverse * relative.position));
+      job.rotation = to_target.orientation.toRotationMatrix();
+      job.translation = to_target.position;
       job.overlap = shapes_[job.target]
                         .shape->bounds()
                         .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))
