@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
   validate->add_option("--family", v.family, "convex, concave, torus, plates, highres or primitives (default: all)");
   validate->add_option("--pairs", v.pairs, "Random pairs per family")->check(CLI::Range(size_t(1), size_t(10'000'000)));
   validate->add_option("--seed", v.seed, "Seed of the random poses");
-  validate->add_option("--mode", v.mode, "full, or iterative (a full step, a motion within the threshold, a walk)");
+  validate->add_option("--mode", v.mode, "full, or iterative (a full step, then 4 steps of a fixed motion, the last judged)");
   rtcd::cli::add_knobs(*validate, v.knobs);
   validate->add_flag("--no-oracles", v.no_oracles, "Only the exact reference (skip FCL, GIMPACT, libccd)");
   validate->add_flag("--json", v.json, "Print JSON");

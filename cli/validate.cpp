@@ -26,9 +26,10 @@ void print_row(const validation::Summary& s) {
                 ratio(s.time_fcl_contacts), ratio(s.time_gimpact));
   std::printf("\n");
   if (s.mode == validation::RunMode::iterative)
-    std::printf("%-10s missed: %zu of %zu deep origins, %zu never tracked after the full step; per colliding pair "
-                "p50 %.2e p90 %.2e p99 %.2e max %.2e\n",
-                "", s.missed, s.deep, s.missed_untracked, s.missed_p50, s.missed_p90, s.missed_p99, s.missed_max);
+    std::printf("%-10s missed: %zu of %zu deep origins, %zu not tracked going into the judged step; per colliding "
+                "pair p50 %.2e p90 %.2e p99 %.2e max %.2e; full steps %.2f%% of %zu motion steps\n",
+                "", s.missed, s.deep, s.missed_untracked, s.missed_p50, s.missed_p90, s.missed_p99, s.missed_max,
+                s.motion_steps ? 100.0 * double(s.full_steps) / double(s.motion_steps) : 0.0, s.motion_steps);
   if (s.ccd_pairs)
     std::printf("%-10s libccd on %zu convex pairs: our largest projected depth / libccd depth = %.3f on average, "
                 "mean |difference| %.4f; libccd %.1f us per pair\n",

@@ -3,6 +3,7 @@
 // the reference the other backends are held to.
 #include "basic_backend.hpp"
 
+#include "rtcd/kernel/nearest.h"
 #include "rtcd/kernel/walk.h"
 
 namespace rtcd {
@@ -30,6 +31,25 @@ class BasicTracer final : public MeshTracer {
         if (t == best.t && best.triangle >= 0) continue;  // ties: lowest index wins
         best.t = t;
         best.triangle = int32_t(i);
+      }
+    }
+    return best;
+  }
+
+  int32_t nearest(const rtcd_vec3& point, float radius) const override {
+    const auto positions = mesh_.positions();
+    const auto triangles = mesh_.triangles();
+    const auto zero_area = mesh_.zero_area();
+    auto v = [&](uint32_t i) { return rtcd_v3(positions[i].x(), positions[i].y(), positions[i].z()); };
+    int32_t best = -1;
+    float best_d2 = radius * radius;
+    for (size_t i = 0; i < triangles.size(); ++i) {
+      if (zero_area[i]) continue;
+      const auto& tri = triangles[i];
+      const float d2 = rtcd_point_triangle_distance2(point, v(tri[0]), v(tri[1]), v(tri[2]));
+      if (d2 <= best_d2 && (best < 0 || d2 < best_d2)) {
+        best_d2 = d2;
+        best = int32_t(i);
       }
     }
     return best;

@@ -4,12 +4,14 @@
 // the shared CPU pipeline and kernel code.
 #include "embree_backend.hpp"
 
+#include <cmath>
 #include <cstring>
 #include <limits>
 
 #include <embree3/rtcore.h>
 
 #include "rtcd/error.hpp"
+#include "rtcd/kernel/nearest.h"
 
 namespace rtcd {
 namespace {
@@ -26,7 +28,7 @@ struct DeviceHandle {
 
 class EmbreeTracer final : public MeshTracer {
  public:
-  EmbreeTracer(std::shared_ptr<DeviceHandle> device, const Mesh& mesh) : device_(std::move(device)) {
+  EmbreeTracer(std::shared_ptr<DeviceHandle> device, const Mesh& mesh) : device_(std::move(device)), mesh_(mesh) {
     scene_ = rtcNewScene(device_->device);
     rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_ROBUST);
     rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_HIGH);
@@ -81,8 +83,46 @@ class EmbreeTracer final : public MeshTracer {
     return hit;
   }
 
+  int32_t nearest(const rtcd_vec3& point, float radius) const override {
+    RTCPointQuery query;
+    query.x = point.x;
+    query.y = point.y;
+    query.z = point.z;
+    query.time = 0.0f;
+    query.radius = radius;
+    RTCPointQueryContext context;
+    rtcInitPointQueryContext(&context);
+    Nearest found{this, point, -1};
+    rtcPointQuery(scene_, &query, &context, &EmbreeTracer::visit, &found);
+    return found.triangle;
+  }
+
  private:
+  struct Nearest {
+    const EmbreeTracer* tracer;
+    rtcd_vec3 point;
+    int32_t triangle;
+  };
+  // Embree calls this for every triangle whose box meets the query sphere;
+  // shrinking the radius prunes the rest.
+  static bool visit(RTCPointQueryFunctionArguments* args) {
+    auto* found = static_cast<Nearest*>(args->userPtr);
+    const Mesh& mesh = found->tracer->mesh_;
+    if (mesh.zero_area()[args->primID]) return false;
+    const auto& tri = mesh.triangles()[args->primID];
+    auto v = [&](uint32_t i) {
+      const Eigen::Vector3f& p = mesh.positions()[i];
+      return rtcd_v3(p.x(), p.y(), p.z());
+    };
+    const float d = std::sqrt(rtcd_point_triangle_distance2(found->point, v(tri[0]), v(tri[1]), v(tri[2])));
+    if (d > args->query->radius || (found->triangle >= 0 && d == args->query->radius)) return false;
+    args->query->radius = d;
+    found->triangle = int32_t(args->primID);
+    return true;
+  }
+
   std::shared_ptr<DeviceHandle> device_;
+  const Mesh& mesh_;  // owned by the registered Shape, which outlives the tracer
   RTCScene scene_;
 };
 

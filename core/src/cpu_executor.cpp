@@ -7,6 +7,7 @@
 #include "parallel.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/kernel/classify.h"
+#include "rtcd/kernel/nearest.h"
 #include "rtcd/kernel/volumes.h"
 #include "rtcd/kernel/walk.h"
 
@@ -22,7 +23,7 @@ rtcd_vec3 to_kernel(const Eigen::Vector3d& v) { return rtcd_v3(float(v.x()), flo
 // Rays per parallel chunk, and the least rays worth handing to other threads:
 // a traced ray costs tens of walks, so full batches go parallel far sooner.
 constexpr size_t kChunk = 128;
-constexpr size_t kParallelWalks = 1024;
+constexpr size_t kParallelWalks = 8192;
 constexpr size_t kParallelTraces = 64;
 
 class CpuExecutor final : public RayExecutor {
@@ -75,7 +76,8 @@ class CpuExecutor final : public RayExecutor {
   // A candidate ray in the target's frame, rounded to the kernel's floats.
   struct Candidate {
     uint32_t vertex;
-    int32_t start;  // iterative: the walk's first triangle
+    int32_t start;  // iterative: the exit walk's first triangle
+    int32_t entry;  // iterative: the entry walk's (TrackedRay::entry)
     rtcd_vec3 origin, direction;
   };
   struct Chunk {
@@ -86,16 +88,16 @@ class CpuExecutor final : public RayExecutor {
     out.clear();
     if (job.overlap.empty()) return;
     const RaySources& rs = shapes_[job.source]->sources();
-    auto consider = [&](uint32_t vertex, int32_t start) {
+    auto consider = [&](uint32_t vertex, int32_t start, int32_t entry) {
       if (rs.directions[vertex].isZero()) return;  // a vertex with no normal casts no ray
       const Eigen::Vector3d p = job.rotation * rs.origins[vertex].cast<double>() + job.translation;
       if (!job.overlap.contains(p)) return;
-      out.push_back({vertex, start, to_kernel(p), to_kernel(Eigen::Vector3d(job.rotation * rs.directions[vertex].cast<double>()))});
+      out.push_back({vertex, start, entry, to_kernel(p), to_kernel(Eigen::Vector3d(job.rotation * rs.directions[vertex].cast<double>()))});
     };
     if (job.iterative) {
-      for (const TrackedRay& r : job.tracked) consider(r.vertex, r.triangle);
+      for (const TrackedRay& r : job.tracked) consider(r.vertex, r.triangle, r.entry);
     } else {
-      for (uint32_t v = 0; v < rs.origins.size(); ++v) consider(v, -1);
+      for (uint32_t v = 0; v < rs.origins.size(); ++v) consider(v, -1, -1);
     }
   }
 
@@ -104,57 +106,110 @@ class CpuExecutor final : public RayExecutor {
     o.vertex = c.vertex;
     const Shape& target = *shapes_[job.target];
     const float extension = float(config.distance_extension);
-    int status = RTCD_LINE_MISS;
-    float t = 0.0f;
     if (const Mesh* mesh = target.mesh()) {
       const auto normals = mesh->triangle_normals();
-      auto leaves_through = [&](int32_t tri) { return rtcd_dot(c.direction, to_kernel(normals[tri])) > 0.0f; };
       if (job.iterative) {
         const rtcd_ray ray = rtcd_make_ray(c.origin, c.direction);
-        const rtcd_walk_result w =
-            rtcd_walk(&ray, reinterpret_cast<const rtcd_vec3*>(mesh->positions().data()),
-                      reinterpret_cast<const rtcd_uint*>(mesh->triangles().data()),
-                      reinterpret_cast<const rtcd_int*>(mesh->neighbors().data()), mesh->zero_area().data(), c.start,
-                      config.max_walk_steps);
-        status = w.status;
-        t = w.t;
-        o.triangle = w.triangle;
-        o.walk_steps = w.steps;
-      } else {
-        const MeshTracer& tracer = *tracers_[job.target];
-        // Inward ray: a first hit leaving the target means the origin is inside.
-        const TraceHit in = tracer.first_hit(rtcd_make_ray(c.origin, c.direction), 3.0e38f);
-        if (in.triangle >= 0 && leaves_through(in.triangle)) {
-          status = RTCD_LINE_HIT;
-          t = in.t;
-          o.triangle = in.triangle;
-        } else if (config.predictive) {
-          // Predictive ray: outward, no further than distance_extension.
-          const TraceHit out = tracer.first_hit(rtcd_make_ray(c.origin, rtcd_neg(c.direction)), extension);
-          o.predictive_cast = 1;
-          if (out.triangle >= 0 && leaves_through(out.triangle)) {
-            status = RTCD_LINE_BEHIND;
-            t = -out.t;
-            o.triangle = out.triangle;
-          }
+        auto walk = [&](int32_t start) {
+          const rtcd_walk_result w =
+              rtcd_walk(&ray, reinterpret_cast<const rtcd_vec3*>(mesh->positions().data()),
+                        reinterpret_cast<const rtcd_uint*>(mesh->triangles().data()),
+                        reinterpret_cast<const rtcd_int*>(mesh->neighbors().data()), mesh->zero_area().data(), start,
+                        config.max_walk_steps);
+          o.walk_steps += w.steps;
+          return w;
+        };
+        const rtcd_walk_result exit = walk(c.start);
+        o.status = uint8_t(exit.status);
+        rtcd_walk_result entry{RTCD_LINE_MISS, -1, 0.0f, 0};
+        if (exit.status == RTCD_LINE_HIT && c.entry >= 0) entry = walk(c.entry);
+        const int inside = rtcd_walked_inside(exit.status, exit.t, entry.status, entry.t);
+        if (inside < 0) {
+          o.retraced = 1;
+          full_trace(*tracers_[job.target], normals, c, config, o);
+          return o;
         }
+        const bool located = exit.status == RTCD_LINE_HIT || exit.status == RTCD_LINE_BEHIND || exit.status == RTCD_LINE_FRONT;
+        o.triangle = located ? exit.triangle : c.start;
+        o.t = exit.t;
+        if (inside == RTCD_RAY_PENETRATING) {
+          o.kind = RTCD_RAY_PENETRATING;
+          o.entry = entry.triangle;
+          return o;
+        }
+        // Backed out with the target ahead, or outside: predictive or watched.
+        o.kind = uint8_t(rtcd_classify(exit.status == RTCD_LINE_HIT ? RTCD_LINE_FRONT : exit.status, exit.t,
+                                       config.predictive, extension));
+        if (o.kind == RTCD_RAY_DROPPED && config.predictive && rtcd_keep_watching(exit.status, exit.t, extension))
+          o.kind = RTCD_RAY_WATCHED;
+        return o;
       }
-    } else {
-      const auto& shape = target.geometry();
-      const rtcd_volume_hit h =
-          std::holds_alternative<Sphere>(shape)
-              ? rtcd_sphere_line(c.origin, c.direction, float(std::get<Sphere>(shape).radius))
-          : std::holds_alternative<Box>(shape)
-              ? rtcd_box_line(c.origin, c.direction, to_kernel(std::get<Box>(shape).half_extents.cast<float>().eval()))
-              : rtcd_halfspace_line(c.origin, c.direction);
-      status = h.status;
-      t = h.t;
-      o.triangle = h.face;
+      full_trace(*tracers_[job.target], normals, c, config, o);
+      return o;
     }
-    o.status = uint8_t(status);
-    o.kind = uint8_t(rtcd_classify(status, t, config.predictive, extension));
-    o.t = t;
+    const auto& shape = target.geometry();
+    const rtcd_volume_hit h =
+        std::holds_alternative<Sphere>(shape)
+            ? rtcd_sphere_line(c.origin, c.direction, float(std::get<Sphere>(shape).radius))
+        : std::holds_alternative<Box>(shape)
+            ? rtcd_box_line(c.origin, c.direction, to_kernel(std::get<Box>(shape).half_extents.cast<float>().eval()))
+            : rtcd_halfspace_line(c.origin, c.direction);
+    // The line test is exact: a candidate neither inside nor about to enter
+    // is watched while it stays near, in full steps as in iterative ones.
+    o.status = uint8_t(h.status);
+    o.kind = uint8_t(rtcd_classify(h.status, h.t, config.predictive, extension));
+    if (o.kind == RTCD_RAY_DROPPED && config.predictive && rtcd_keep_watching(h.status, h.t, extension))
+      o.kind = RTCD_RAY_WATCHED;
+    o.t = h.t;
+    o.triangle = h.face;
     return o;
+  }
+
+  // Full tracing of one mesh ray: the inward ray; if it does not leave the
+  // target, the predictive ray; if neither meets it, the nearest triangle
+  // within reach, from which the vertex is watched.
+  static void full_trace(const MeshTracer& tracer, std::span<const Eigen::Vector3f> normals, const Candidate& c,
+                         const Config& config, RayOutcome& o) {
+    const float extension = float(config.distance_extension);
+    auto leaves_through = [&](int32_t tri) { return rtcd_dot(c.direction, to_kernel(normals[tri])) > 0.0f; };
+    o.kind = RTCD_RAY_DROPPED;
+    o.triangle = -1;
+    o.t = 0.0f;
+    // Inward ray: a first hit leaving the target means the origin is inside.
+    const TraceHit in = tracer.first_hit(rtcd_make_ray(c.origin, c.direction), 3.0e38f);
+    if (in.triangle >= 0 && leaves_through(in.triangle)) {
+      o.kind = RTCD_RAY_PENETRATING;
+      o.triangle = in.triangle;
+      o.t = in.t;
+      // Where the line entered, behind the vertex: the later walks check the
+      // vertex is still past it (full mode never walks).
+      if (config.mode != Mode::full) {
+        const TraceHit back = tracer.first_hit(rtcd_make_ray(c.origin, rtcd_neg(c.direction)), 3.0e38f);
+        if (back.triangle >= 0 && !leaves_through(back.triangle)) o.entry = back.triangle;
+      }
+      return;
+    }
+    if (!config.predictive) return;
+    // Predictive ray: outward, no further than distance_extension.
+    const TraceHit out = tracer.first_hit(rtcd_make_ray(c.origin, rtcd_neg(c.direction)), extension);
+    o.predictive_cast = 1;
+    if (out.triangle >= 0 && leaves_through(out.triangle)) {
+      o.kind = RTCD_RAY_PREDICTIVE;
+      o.triangle = out.triangle;
+      o.t = -out.t;
+      return;
+    }
+    // Watching serves only later walks, which full mode never makes. In
+    // automatic mode no point moves farther than displacement_threshold
+    // relative to the target before the pair is traced in full again.
+    if (config.mode == Mode::full) return;
+    o.nearest_query = 1;
+    const float reach = config.mode == Mode::automatic ? float(config.displacement_threshold) : extension;
+    const int32_t near = tracer.nearest(c.origin, reach);
+    if (near >= 0) {
+      o.kind = RTCD_RAY_WATCHED;
+      o.triangle = near;
+    }
   }
 
   std::unique_ptr<MeshTracerFactory> factory_;

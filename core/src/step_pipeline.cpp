@@ -26,7 +26,7 @@ std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) 
 // Least outcomes worth counting, and worth turning into records, on several
 // threads: counting is a few additions per outcome, a record dozens of flops.
 constexpr size_t kParallelCount = 16384;
-constexpr size_t kParallelFill = 512;
+constexpr size_t kParallelFill = 4096;
 
 // A shape as the host builds records from it: what the refinement and the
 // records need, converted to double once instead of at every ray.
@@ -91,19 +91,23 @@ struct ShapeEntry {
 struct PairTally {
   size_t contacts = 0, predictive = 0;
   size_t candidates = 0, rays_full = 0, rays_predictive = 0, rays_iterative = 0, walk_steps = 0;
+  size_t nearest_queries = 0, rays_retraced = 0, rays_watched = 0;
   std::array<size_t, RTCD_LINE_STATUS_COUNT> endings{};
 
   void count(const RayOutcome& o, bool iterative) {
     ++candidates;
     contacts += o.kind == RTCD_RAY_PENETRATING;
     predictive += o.kind == RTCD_RAY_PREDICTIVE;
+    rays_watched += o.kind == RTCD_RAY_WATCHED;
+    rays_predictive += o.predictive_cast;
+    nearest_queries += o.nearest_query;
+    rays_retraced += o.retraced;
     if (iterative) {
       ++rays_iterative;
       walk_steps += o.walk_steps;
       ++endings[o.status];
     } else {
       ++rays_full;
-      rays_predictive += o.predictive_cast;
     }
   }
 };
@@ -305,6 +309,9 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     s.rays_predictive += t.rays_predictive;
     s.rays_iterative += t.rays_iterative;
     s.walk_steps += t.walk_steps;
+    s.nearest_queries += t.nearest_queries;
+    s.rays_retraced += t.rays_retraced;
+    s.rays_watched += t.rays_watched;
     for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) s.walk_endings[e] += t.endings[e];
   }
   out.contacts.resize(contacts);
@@ -337,7 +344,8 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
   tracked.clear();
   for (const RayOutcome& o : outcomes) {
     if (o.kind == RTCD_RAY_DROPPED) continue;
-    tracked.push_back({o.vertex, o.triangle});
+    tracked.push_back({o.vertex, o.triangle, o.entry});
+    if (o.kind == RTCD_RAY_WATCHED) continue;
     const Eigen::Vector3d origin = source.shape->sources().origins[o.vertex].cast<double>();
     const Eigen::Vector3d& direction = source.directions[o.vertex];
     // In the target's frame: keep the executor's decision, sharpen the distance.

@@ -58,10 +58,8 @@ TEST_P(Differential, BoundsHold) {
   o.mode = c.mode;
   o.pairs = 1000 * env_number("RTCD_DIFFERENTIAL_INTENSITY", 1);
   o.seed = env_number("RTCD_DIFFERENTIAL_SEED", 1);
-  if (c.mode == RunMode::iterative) {
-    o.config.displacement_threshold = family.iterative_threshold();
-    std::cout << "displacement threshold " << o.config.displacement_threshold << '\n';
-  }
+  // Iterative runs use the default configuration: the bounds below are what
+  // a host gets without tuning.
   // The reference libraries judge the poses, not our backend: once per
   // family. GIMPACT takes long on the 20k-triangle family: 100 pairs there.
   o.with_oracles = c.mode == RunMode::full && c.backend == test::usable_backends().front();
@@ -85,7 +83,15 @@ TEST_P(Differential, BoundsHold) {
     report_first(family, r, o, [](const PairMetrics& m) { return m.max_relative_depth_error > 1e-4; }, "depth error");
   } else {
     EXPECT_EQ(s.iterative_pairs, s.pairs) << "every judged step must walk";
-    EXPECT_LE(s.missed_rate(), 0.01) << s.missed << " of " << s.deep << " deep origins missed";
+    EXPECT_LE(s.missed_rate(), 0.005) << s.missed << " of " << s.deep << " deep origins missed";
+    // A walk cannot see a concavity's gap open between the faces it tracks
+    // (docs/ARCHITECTURE.md): a few false rays in a million, never more.
+    EXPECT_LE(double(s.false_rays), 1e-5 * double(s.far_outside)) << "of " << s.far_outside << " origins outside";
+    for (const PairMetrics& m : r.pairs)
+      if (m.false_rays > 0) {
+        std::cout << "first pair with a false ray:\n" << describe(family, m, o) << '\n';
+        break;
+      }
   }
   if (o.with_oracles) {
     // FCL sees every pair with a deep vertex, except one body wholly inside

@@ -81,6 +81,8 @@ RunMode parse_run_mode(const std::string& text) {
 
 RunResult run_family(const Family& family, const RunOptions& options) {
   if (options.pairs == 0) throw UsageError("a validation run needs at least one pair");
+  if (options.mode == RunMode::iterative && options.motion_steps == 0)
+    throw UsageError("an iterative validation run needs at least one motion step");
   Config config = options.config;
   config.mode = options.mode == RunMode::full ? Mode::full : Mode::automatic;
   config.validate();
@@ -96,6 +98,7 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   s.seed = options.seed;
   s.epsilon = epsilon;
   s.with_oracles = options.with_oracles;
+  if (options.mode == RunMode::iterative) s.motion_steps = options.pairs * options.motion_steps;
 
   // Our backend: every pair in one batch, as a host would step them.
   auto narrow = make_narrow_phase(options.backend, config);
@@ -108,17 +111,27 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     pairs[i] = {narrow->add_body(sa, judged[i].a), narrow->add_body(sb, judged[i].b)};
   }
   StepResult step;
-  std::vector<std::vector<std::pair<Side, uint32_t>>> tracked(options.pairs);  // after the full step
+  // What was tracked going into the judged step (iterative runs).
+  std::vector<std::vector<std::pair<Side, uint32_t>>> tracked(options.pairs);
+  std::vector<size_t> full_steps(options.pairs, 0);
   if (options.mode == RunMode::iterative) {
     narrow->detect(pairs, step);
-    for (size_t i = 0; i < options.pairs; ++i) {
-      for (const Contact& c : step.contacts_of(step.pairs[i])) tracked[i].push_back({c.source, c.vertex});
-      for (const PredictiveRay& p : step.predictive_of(step.pairs[i])) tracked[i].push_back({p.source, p.vertex});
-    }
-    for (size_t i = 0; i < options.pairs; ++i) {
-      judged[i] = moved(family, judged[i], config.displacement_threshold, options.seed, i);
-      narrow->set_pose(pairs[i].a, judged[i].a);
-      narrow->set_pose(pairs[i].b, judged[i].b);
+    for (size_t k = 0; k < options.motion_steps; ++k) {
+      if (k > 0) {
+        narrow->detect(pairs, step);
+        for (size_t i = 0; i < options.pairs; ++i) full_steps[i] += step.pairs[i].mode == PairMode::full;
+      }
+      if (k + 1 == options.motion_steps) {
+        for (size_t i = 0; i < options.pairs; ++i) {
+          for (const Contact& c : step.contacts_of(step.pairs[i])) tracked[i].push_back({c.source, c.vertex});
+          for (const PredictiveRay& p : step.predictive_of(step.pairs[i])) tracked[i].push_back({p.source, p.vertex});
+        }
+      }
+      for (size_t i = 0; i < options.pairs; ++i) {
+        judged[i] = moved(family, judged[i], family.step_motion(), options.seed, i);
+        narrow->set_pose(pairs[i].a, judged[i].a);
+        narrow->set_pose(pairs[i].b, judged[i].b);
+      }
     }
   }
   const auto t0 = Clock::now();
@@ -144,6 +157,7 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     m.poses = judged[i];
     const PairResult& pr = step.pairs[i];
     m.iterative = pr.mode == PairMode::iterative;
+    m.full_steps = full_steps[i] + (options.mode == RunMode::iterative && !m.iterative);
     m.colliding_ours = pr.colliding;
     std::fill(ours_a.begin(), ours_a.end(), OurRay{});
     std::fill(ours_b.begin(), ours_b.end(), OurRay{});
@@ -188,6 +202,7 @@ RunResult run_family(const Family& family, const RunOptions& options) {
 
     // Aggregate.
     s.iterative_pairs += m.iterative;
+    s.full_steps += m.full_steps;
     s.deep += m.deep;
     s.missed += m.missed;
     s.missed_untracked += m.missed_untracked;
@@ -242,6 +257,8 @@ nlohmann::json to_json(const Summary& s) {
           {"seed", s.seed},
           {"epsilon", s.epsilon},
           {"iterative_pairs", s.iterative_pairs},
+          {"motion_steps", s.motion_steps},
+          {"full_step_rate", s.motion_steps ? double(s.full_steps) / double(s.motion_steps) : 0.0},
           {"colliding_fraction", s.colliding_fraction()},
           {"deep_origins", s.deep},
           {"missed", s.missed},

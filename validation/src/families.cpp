@@ -90,6 +90,8 @@ double Family::iterative_threshold() const {
   return std::min(0.01 * std::max(a->radius(), b->radius()), 0.1 * thinnest);
 }
 
+double Family::step_motion() const { return 0.005 * std::max(a->radius(), b->radius()); }
+
 PosePair random_poses(const Family& family, uint64_t seed, uint64_t index) {
   auto g = generator(seed, index, 0);
   PosePair p;

@@ -24,6 +24,9 @@ class MeshTracer {
   // Nearest triangle met by origin + t * direction with 0 <= t <= t_max,
   // from either side; zero-area triangles are never hit.
   virtual TraceHit first_hit(const rtcd_ray& ray, float t_max) const = 0;
+  // A triangle nearest to `point` within `radius` (ties: any), or -1; zero-area
+  // triangles are never returned.
+  virtual int32_t nearest(const rtcd_vec3& point, float radius) const = 0;
 };
 
 class MeshTracerFactory {

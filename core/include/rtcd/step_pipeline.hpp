@@ -19,7 +19,8 @@ namespace rtcd {
 // executor can take over a pair without tracing it again.
 struct TrackedRay {
   uint32_t vertex;
-  int32_t triangle;
+  int32_t triangle;  // where the next walk starts: the exit face of a penetrating ray
+  int32_t entry;     // penetrating rays: the face the line enters through behind the vertex; -1 unknown
 };
 
 // One direction of one pair: the source's rays against the target.
@@ -42,11 +43,14 @@ struct RayJob {
 struct RayOutcome {
   uint32_t vertex = 0;
   int32_t triangle = -1;
+  int32_t entry = -1;  // see TrackedRay
   float t = 0.0f;
   uint32_t walk_steps = 0;   // iterative rays: triangles the walk located
-  uint8_t kind = 0;          // rtcd_ray_kind
-  uint8_t status = 0;        // rtcd_line_status (iterative rays and volumes)
-  uint8_t predictive_cast = 0;  // full rays: an outward predictive ray was traced too
+  uint8_t kind = 0;             // rtcd_ray_kind; WATCHED is tracked but not reported
+  uint8_t status = 0;           // rtcd_line_status (iterative rays and volumes)
+  uint8_t predictive_cast = 0;  // an outward predictive ray was traced too
+  uint8_t nearest_query = 0;    // a nearest-triangle query was made (neither ray met the target)
+  uint8_t retraced = 0;         // iterative: the walks could not be trusted (rtcd_walk_doubtful), traced again
 };
 
 class RayExecutor {
@@ -57,7 +61,8 @@ class RayExecutor {
   // outcomes[j] receives job j's candidates in order: every origin with a
   // direction inside the overlap box (full jobs, by vertex), or every tracked
   // ray whose origin is inside it (iterative jobs, in tracked order); a ray
-  // that reports nothing has kind RTCD_RAY_DROPPED. The caller sizes
+  // that reports nothing has kind RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when
+  // it stays tracked (its `triangle` is where the next walk starts). The caller sizes
   // `outcomes` to at least jobs.size(); the executor only clears and fills.
   virtual void execute(std::span<const RayJob> jobs, const Config& config,
                        std::span<std::vector<RayOutcome>> outcomes) = 0;

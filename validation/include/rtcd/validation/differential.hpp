@@ -18,7 +18,7 @@ namespace rtcd::validation {
 
 enum class RunMode {
   full,       // one full step at the drawn poses
-  iterative,  // a full step, then a motion within displacement_threshold, then the judged step
+  iterative,  // a full step, then motion_steps steps of Family::step_motion(), the last one judged
 };
 const char* to_string(RunMode mode);
 RunMode parse_run_mode(const std::string& text);  // UsageError otherwise
@@ -37,15 +37,21 @@ struct RunOptions {
   // runs on the first `gimpact_pairs` pairs only.
   size_t gimpact_pairs = std::numeric_limits<size_t>::max();
   bool single_thread = true;  // our backend on one thread, as the oracles run
+  // Iterative runs: steps after the full one, each moving B by the family's
+  // step_motion() (the same way each time). A fixed physical motion, so a
+  // smaller displacement threshold buys accuracy with full steps, never by
+  // shrinking the test.
+  size_t motion_steps = 4;
 };
 
 struct PairMetrics {
   uint64_t index = 0;
-  PosePair poses;  // where it was judged (after the motion in iterative runs)
+  PosePair poses;  // where it was judged (after the motions in iterative runs)
   bool iterative = false;  // the judged step walked (iterative runs)
+  size_t full_steps = 0;   // iterative runs: of the motion steps, those equation 2.1 sent back to full
   size_t deep = 0;         // origins the exact reference puts inside deeper than epsilon
   size_t missed = 0;       // ... with no penetrating ray
-  size_t missed_untracked = 0;  // ... of those, no ray was tracked for after the full step (iterative runs)
+  size_t missed_untracked = 0;  // ... of those, no ray was tracked for going into the judged step (iterative runs)
   size_t far_outside = 0;  // origins outside by more than epsilon
   size_t false_rays = 0;   // penetrating rays from those
   size_t depth_checked = 0;
@@ -67,6 +73,7 @@ struct Summary {
   uint64_t seed = 0;
   double epsilon = 0.0;
   size_t iterative_pairs = 0;
+  size_t motion_steps = 0, full_steps = 0;  // iterative runs: pair-steps after the first, and those traced in full
   bool with_oracles = false;  // FCL, GIMPACT, libccd ran: their fields mean something
   size_t deep = 0, missed = 0, missed_untracked = 0, far_outside = 0, false_rays = 0, depth_checked = 0;
   double max_depth_error = 0.0, max_relative_depth_error = 0.0, mean_depth_error = 0.0;

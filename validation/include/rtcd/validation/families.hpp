@@ -30,6 +30,9 @@ struct Family {
   // bound them); at the default threshold a vertex entering sideways, with
   // no predictive ray, is missed more often (see docs/results).
   double iterative_threshold() const;
+  // The motion per step of iterative validation runs: 0.5% of the larger
+  // radius (equation 2.1), whatever the configuration under test.
+  double step_motion() const;
 };
 
 // convex, concave, torus, plates, highres, primitives.
