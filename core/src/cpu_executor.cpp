@@ -126,7 +126,7 @@ class CpuExecutor final : public RayExecutor {
         const int inside = rtcd_walked_inside(exit.status, exit.t, entry.status, entry.t);
         if (inside < 0) {
           o.retraced = 1;
-          full_trace(*tracers_[job.target], normals, c, config, o);
+          full_trace(*tracers_[job.target], normals, target.bounds(), c, config, o);
           return o;
         }
         const bool located = exit.status == RTCD_LINE_HIT || exit.status == RTCD_LINE_BEHIND || exit.status == RTCD_LINE_FRONT;
@@ -144,7 +144,7 @@ class CpuExecutor final : public RayExecutor {
           o.kind = RTCD_RAY_WATCHED;
         return o;
       }
-      full_trace(*tracers_[job.target], normals, c, config, o);
+      full_trace(*tracers_[job.target], normals, target.bounds(), c, config, o);
       return o;
     }
     const auto& shape = target.geometry();
@@ -168,8 +168,8 @@ class CpuExecutor final : public RayExecutor {
   // Full tracing of one mesh ray: the inward ray; if it does not leave the
   // target, the predictive ray; if neither meets it, the nearest triangle
   // within reach, from which the vertex is watched.
-  static void full_trace(const MeshTracer& tracer, std::span<const Eigen::Vector3f> normals, const Candidate& c,
-                         const Config& config, RayOutcome& o) {
+  static void full_trace(const MeshTracer& tracer, std::span<const Eigen::Vector3f> normals, const Aabb& bounds,
+                         const Candidate& c, const Config& config, RayOutcome& o) {
     const float extension = float(config.distance_extension);
     auto leaves_through = [&](int32_t tri) { return rtcd_dot(c.direction, to_kernel(normals[tri])) > 0.0f; };
     o.kind = RTCD_RAY_DROPPED;
@@ -203,9 +203,11 @@ class CpuExecutor final : public RayExecutor {
     // automatic mode no point moves farther than displacement_threshold
     // relative to the target before the pair is traced in full again.
     if (config.mode == Mode::full) return;
+    const double reach = config.mode == Mode::automatic ? config.displacement_threshold : config.distance_extension;
+    const Eigen::Vector3d origin(c.origin.x, c.origin.y, c.origin.z);
+    if (!bounds.grown(reach).contains(origin)) return;
     o.nearest_query = 1;
-    const float reach = config.mode == Mode::automatic ? float(config.displacement_threshold) : extension;
-    const int32_t near = tracer.nearest(c.origin, reach);
+    const int32_t near = tracer.nearest(c.origin, float(reach));
     if (near >= 0) {
       o.kind = RTCD_RAY_WATCHED;
       o.triangle = near;
