@@ -29,6 +29,9 @@ nlohmann::json stats_json(const StepStats& s) {
           {"rays_iterative", s.rays_iterative},
           {"walk_steps", s.walk_steps},
           {"walk_endings", endings},
+          {"nearest_queries", s.nearest_queries},
+          {"rays_retraced", s.rays_retraced},
+          {"rays_watched", s.rays_watched},
           {"seconds", {{"prepare", s.seconds_prepare},
                        {"full", s.seconds_full},
                        {"iterative", s.seconds_iterative},
@@ -86,8 +89,10 @@ void print_table(std::ostream& out, const StepResult& step) {
   }
   const StepStats& s = step.stats;
   std::snprintf(line, sizeof line,
-                "rays: %zu full, %zu predictive, %zu iterative; candidates %zu; walk steps %zu; time %.3f ms\n",
-                s.rays_full, s.rays_predictive, s.rays_iterative, s.candidates, s.walk_steps,
+                "rays: %zu full, %zu predictive, %zu iterative (%zu traced again, %zu watched); candidates %zu; "
+                "nearest queries %zu; walk steps %zu; time %.3f ms\n",
+                s.rays_full, s.rays_predictive, s.rays_iterative, s.rays_retraced, s.rays_watched, s.candidates,
+                s.nearest_queries, s.walk_steps,
                 1e3 * (s.seconds_prepare + s.seconds_full + s.seconds_iterative + s.seconds_gather));
   out << line;
 }

@@ -26,6 +26,8 @@ std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) 
 // Least outcomes worth counting, and worth turning into records, on several
 // threads: counting is a few additions per outcome, a record dozens of flops.
 constexpr size_t kParallelCount = 16384;
+// Least pairs worth placing (transforms and boxes) on several threads.
+constexpr size_t kParallelPairs = 1024;
 constexpr size_t kParallelFill = 4096;
 
 // A shape as the host builds records from it: what the refinement and the
@@ -170,6 +172,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   }
   void validate(std::span<const BodyPair> pairs);
   void prepare(std::span<const BodyPair> pairs, StepResult& out);
+  void place(RayJob& job, BodyId source, BodyId target) const;
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive, std::vector<TrackedRay>& tracked) const;
@@ -259,24 +262,34 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     const uint32_t list = iterative ? 1 : 0;
     work_[i] = {&state, list, uint32_t(jobs_[list].size()), {}};
     for (const BodyId source : {p.a, p.b}) {
-      const BodyId target = source == p.a ? p.b : p.a;
-      // Each direction from the two poses, not one from the other's inverse:
-      // numbering the bodies the other way round then changes no bit.
-      const Pose to_target = bodies_[target].pose.inverse() * bodies_[source].pose;
       RayJob& job = jobs_[list].emplace_back();
       job.source = bodies_[source].shape;
-      job.target = bodies_[target].shape;
-      job.rotation = to_target.orientation.toRotationMatrix();
-      job.translation = to_target.position;
-      job.overlap = shapes_[job.target]
-                        .shape->bounds()
-                        .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))
-                        .grown(config_.distance_extension);
+      job.target = bodies_[source == p.a ? p.b : p.a].shape;
       job.iterative = iterative;
       job.tracked = state.tracked[source == lo ? 0 : 1];
     }
   }
   std::erase_if(states_, [this](const auto& kv) { return kv.second.step != step_; });
+
+  // Each job's transform and candidate box: independent per pair, so on
+  // several threads once there are enough pairs.
+  for_each_index(pairs.size(), pairs.size() >= kParallelPairs, [&](size_t i) {
+    const PairWork& w = work_[i];
+    place(jobs_[w.list][w.first], pairs[i].a, pairs[i].b);
+    place(jobs_[w.list][w.first + 1], pairs[i].b, pairs[i].a);
+  });
+}
+
+// Each direction from the two poses, not one from the other's inverse:
+// numbering the bodies the other way round then changes no bit.
+void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const {
+  const Pose to_target = bodies_[target].pose.inverse() * bodies_[source].pose;
+  job.rotation = to_target.orientation.toRotationMatrix();
+  job.translation = to_target.position;
+  job.overlap = shapes_[job.target]
+                    .shape->bounds()
+                    .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))
+                    .grown(config_.distance_extension);
 }
 
 // Ranges per pair in input order (a's rays, then b's), then every record

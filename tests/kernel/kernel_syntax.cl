@@ -1,6 +1,7 @@
 /* Compiles the shared kernel headers as OpenCL C 1.2 and calls each entry
  * point, so the C/OpenCL-C subset stays honest. */
 #include "rtcd/kernel/classify.h"
+#include "rtcd/kernel/nearest.h"
 #include "rtcd/kernel/volumes.h"
 #include "rtcd/kernel/walk.h"
 
@@ -11,5 +12,8 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   rtcd_walk_result w = rtcd_walk(&ray, positions, triangles, neighbors, zero_area, 0, 16u);
   rtcd_volume_hit s = rtcd_sphere_line(ray.origin, ray.direction, 1.0f);
   rtcd_volume_hit b = rtcd_box_line(ray.origin, ray.direction, rtcd_v3(1.0f, 1.0f, 1.0f));
-  out[get_global_id(0)] = w.t + s.t + b.t + (float)rtcd_classify(w.status, w.t, 1, 0.1f);
+  float d2 = rtcd_point_triangle_distance2(ray.origin, positions[0], positions[1], positions[2]);
+  int kind = rtcd_classify(w.status, w.t, 1, 0.1f) + rtcd_keep_watching(w.status, w.t, 0.1f) +
+             rtcd_walked_inside(w.status, w.t, s.status, s.t);
+  out[get_global_id(0)] = w.t + s.t + b.t + d2 + (float)kind;
 }
