@@ -4,6 +4,8 @@
 // thread count, and buffers keep their capacity from step to step.
 #include "rtcd/cpu_executor.hpp"
 
+#include <algorithm>
+
 #include "parallel.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/kernel/classify.h"
@@ -20,7 +22,7 @@ static_assert(sizeof(Mesh::Triangle) == 3 * sizeof(rtcd_uint) && sizeof(Mesh::Ne
 rtcd_vec3 to_kernel(const Eigen::Vector3f& v) { return rtcd_v3(v.x(), v.y(), v.z()); }
 rtcd_vec3 to_kernel(const Eigen::Vector3d& v) { return rtcd_v3(float(v.x()), float(v.y()), float(v.z())); }
 
-// Rays per parallel chunk, and the least rays worth handing to other threads:
+// Most rays per parallel chunk, and the least rays worth handing to other threads:
 // a traced ray costs tens of walks, so full batches go parallel far sooner.
 constexpr size_t kChunk = 128;
 constexpr size_t kParallelWalks = 8192;
@@ -57,12 +59,15 @@ class CpuExecutor final : public RayExecutor {
       select(jobs[j], candidates_[j]);
       outcomes[j].resize(candidates_[j].size());
     });
-    chunks_.clear();
+    // Chunks small enough to spread even a one-pair step over the threads;
+    // each ray writes its own slot, so the split never changes a result.
     size_t rays = 0;
+    for (size_t j = 0; j < jobs.size(); ++j) rays += candidates_[j].size();
+    const uint32_t chunk = uint32_t(std::clamp<size_t>(rays / 16, 16, kChunk));
+    chunks_.clear();
     for (uint32_t j = 0; j < jobs.size(); ++j) {
       const uint32_t n = uint32_t(candidates_[j].size());
-      for (uint32_t begin = 0; begin < n; begin += kChunk) chunks_.push_back({j, begin, std::min<uint32_t>(n, begin + kChunk)});
-      rays += n;
+      for (uint32_t begin = 0; begin < n; begin += chunk) chunks_.push_back({j, begin, std::min<uint32_t>(n, begin + chunk)});
     }
     for_each_index(chunks_.size(), rays >= kParallelTraces, [&](size_t c) {
       const Chunk& chunk = chunks_[c];
