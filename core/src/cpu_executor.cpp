@@ -124,18 +124,26 @@ class CpuExecutor final : public RayExecutor {
           o.walk_steps += w.steps;
           return w;
         };
-        const rtcd_walk_result exit = walk(c.start);
+        int32_t start = c.start;
+        if (start < 0) {
+          // Watched since the full step, its nearest triangle not looked up
+          // yet: done now that the pair walks.
+          o.nearest_query = 1;
+          start = tracers_[job.target]->nearest(c.origin, float(watch_reach(config)));
+          if (start < 0) return o;  // dropped: nothing within reach
+        }
+        const rtcd_walk_result exit = walk(start);
         o.status = uint8_t(exit.status);
         rtcd_walk_result entry{RTCD_LINE_MISS, -1, 0.0f, 0};
         if (exit.status == RTCD_LINE_HIT && c.entry >= 0) entry = walk(c.entry);
         const int inside = rtcd_walked_inside(exit.status, exit.t, entry.status, entry.t);
         if (inside < 0) {
           o.retraced = 1;
-          full_trace(*tracers_[job.target], normals, target.bounds(), c, config, o);
+          full_trace(*tracers_[job.target], normals, target.bounds(), c, config, true, o);
           return o;
         }
         const bool located = exit.status == RTCD_LINE_HIT || exit.status == RTCD_LINE_BEHIND || exit.status == RTCD_LINE_FRONT;
-        o.triangle = located ? exit.triangle : c.start;
+        o.triangle = located ? exit.triangle : start;
         o.t = exit.t;
         if (inside == RTCD_RAY_PENETRATING) {
           o.kind = RTCD_RAY_PENETRATING;
@@ -149,7 +157,7 @@ class CpuExecutor final : public RayExecutor {
           o.kind = RTCD_RAY_WATCHED;
         return o;
       }
-      full_trace(*tracers_[job.target], normals, target.bounds(), c, config, o);
+      full_trace(*tracers_[job.target], normals, target.bounds(), c, config, false, o);
       return o;
     }
     const auto& shape = target.geometry();
@@ -170,11 +178,21 @@ class CpuExecutor final : public RayExecutor {
     return o;
   }
 
+  // How far from the target a vertex is watched. In automatic mode no point
+  // moves farther than displacement_threshold relative to the target before
+  // the pair is traced in full again.
+  static double watch_reach(const Config& config) {
+    return config.mode == Mode::automatic ? config.displacement_threshold : config.distance_extension;
+  }
+
   // Full tracing of one mesh ray: the inward ray; if it does not leave the
-  // target, the predictive ray; if neither meets it, the nearest triangle
-  // within reach, from which the vertex is watched.
+  // target, the predictive ray; if neither meets it and the vertex is within
+  // reach of the target's box, it is watched. What serves only later walks
+  // (the entry face of a penetrating ray, a watched vertex's nearest
+  // triangle) is found when the pair walks (`walking`: a walk's re-trace),
+  // so full steps of pairs that are traced in full again cost no more.
   static void full_trace(const MeshTracer& tracer, std::span<const Eigen::Vector3f> normals, const Aabb& bounds,
-                         const Candidate& c, const Config& config, RayOutcome& o) {
+                         const Candidate& c, const Config& config, bool walking, RayOutcome& o) {
     const float extension = float(config.distance_extension);
     auto leaves_through = [&](int32_t tri) { return rtcd_dot(c.direction, to_kernel(normals[tri])) > 0.0f; };
     o.kind = RTCD_RAY_DROPPED;
@@ -186,9 +204,9 @@ class CpuExecutor final : public RayExecutor {
       o.kind = RTCD_RAY_PENETRATING;
       o.triangle = in.triangle;
       o.t = in.t;
-      // Where the line entered, behind the vertex: the later walks check the
-      // vertex is still past it (full mode never walks).
-      if (config.mode != Mode::full) {
+      // Where the line entered, behind the vertex: the next walks check the
+      // vertex is still past it.
+      if (walking) {
         const TraceHit back = tracer.first_hit(rtcd_make_ray(c.origin, rtcd_neg(c.direction)), 3.0e38f);
         if (back.triangle >= 0 && !leaves_through(back.triangle)) o.entry = back.triangle;
       }
@@ -204,13 +222,14 @@ class CpuExecutor final : public RayExecutor {
       o.t = -out.t;
       return;
     }
-    // Watching serves only later walks, which full mode never makes. In
-    // automatic mode no point moves farther than displacement_threshold
-    // relative to the target before the pair is traced in full again.
+    // Watching serves only later walks, which full mode never makes.
     if (config.mode == Mode::full) return;
-    const double reach = config.mode == Mode::automatic ? config.displacement_threshold : config.distance_extension;
-    const Eigen::Vector3d origin(c.origin.x, c.origin.y, c.origin.z);
-    if (!bounds.grown(reach).contains(origin)) return;
+    const double reach = watch_reach(config);
+    if (!bounds.grown(reach).contains(Eigen::Vector3d(c.origin.x, c.origin.y, c.origin.z))) return;
+    if (!walking) {
+      o.kind = RTCD_RAY_WATCHED;  // triangle -1: looked up if the pair walks
+      return;
+    }
     o.nearest_query = 1;
     const int32_t near = tracer.nearest(c.origin, float(reach));
     if (near >= 0) {

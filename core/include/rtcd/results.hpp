@@ -72,7 +72,7 @@ struct StepStats {
   size_t fallbacks_to_full = 0;  // pairs with state sent back to full by equation 2.1
   size_t candidates = 0;         // ray origins inside the grown bounding-box overlap
   size_t rays_full = 0;          // inward rays traced in full steps
-  size_t rays_predictive = 0;    // outward predictive rays traced (full steps, and walks traced again)
+  size_t rays_predictive = 0;    // outward predictive rays traced (full steps and re-traces)
   size_t rays_iterative = 0;     // tracked rays walked in iterative steps
   size_t walk_steps = 0;         // triangles located by all walks
   size_t nearest_queries = 0;    // nearest-triangle queries for vertices neither ray met

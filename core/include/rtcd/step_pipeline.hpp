@@ -19,7 +19,8 @@ namespace rtcd {
 // executor can take over a pair without tracing it again.
 struct TrackedRay {
   uint32_t vertex;
-  int32_t triangle;  // where the next walk starts: the exit face of a penetrating ray
+  int32_t triangle;  // where the next walk starts (the exit face of a penetrating ray); -1: a
+                     // watched vertex whose nearest triangle is looked up when the pair walks
   int32_t entry;     // penetrating rays: the face the line enters through behind the vertex; -1 unknown
 };
 
@@ -48,7 +49,7 @@ struct RayOutcome {
   uint32_t walk_steps = 0;   // iterative rays: triangles the walk located
   uint8_t kind = 0;             // rtcd_ray_kind; WATCHED is tracked but not reported
   uint8_t status = 0;           // rtcd_line_status (iterative rays and volumes)
-  uint8_t predictive_cast = 0;  // an outward predictive ray was traced too
+  uint8_t predictive_cast = 0;  // an outward ray was traced too (predictive, or a re-traced hit's entry face)
   uint8_t nearest_query = 0;    // a nearest-triangle query was made (neither ray met the target)
   uint8_t retraced = 0;         // iterative: the walks could not be trusted (rtcd_walk_doubtful), traced again
 };
