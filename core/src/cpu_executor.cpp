@@ -136,25 +136,18 @@ class CpuExecutor final : public RayExecutor {
         o.status = uint8_t(exit.status);
         rtcd_walk_result entry{RTCD_LINE_MISS, -1, 0.0f, 0};
         if (exit.status == RTCD_LINE_HIT && c.entry >= 0) entry = walk(c.entry);
-        const int inside = rtcd_walked_inside(exit.status, exit.t, entry.status, entry.t);
-        if (inside < 0) {
+        const int kind = rtcd_walked_kind(exit.status, exit.t, entry.status, entry.t, config.predictive,
+                                          watches(config), extension);
+        if (kind < 0) {
           o.retraced = 1;
           full_trace(*tracers_[job.target], normals, target.bounds(), c, config, true, o);
           return o;
         }
         const bool located = exit.status == RTCD_LINE_HIT || exit.status == RTCD_LINE_BEHIND || exit.status == RTCD_LINE_FRONT;
+        o.kind = uint8_t(kind);
         o.triangle = located ? exit.triangle : start;
         o.t = exit.t;
-        if (inside == RTCD_RAY_PENETRATING) {
-          o.kind = RTCD_RAY_PENETRATING;
-          o.entry = entry.triangle;
-          return o;
-        }
-        // Backed out with the target ahead, or outside: predictive or watched.
-        o.kind = uint8_t(rtcd_classify(exit.status == RTCD_LINE_HIT ? RTCD_LINE_FRONT : exit.status, exit.t,
-                                       config.predictive, extension));
-        if (o.kind == RTCD_RAY_DROPPED && config.predictive && rtcd_keep_watching(exit.status, exit.t, extension))
-          o.kind = RTCD_RAY_WATCHED;
+        if (kind == RTCD_RAY_PENETRATING) o.entry = entry.triangle;
         return o;
       }
       full_trace(*tracers_[job.target], normals, target.bounds(), c, config, false, o);
@@ -170,13 +163,15 @@ class CpuExecutor final : public RayExecutor {
     // The line test is exact: a candidate neither inside nor about to enter
     // is watched while it stays near, in full steps as in iterative ones.
     o.status = uint8_t(h.status);
-    o.kind = uint8_t(rtcd_classify(h.status, h.t, config.predictive, extension));
-    if (o.kind == RTCD_RAY_DROPPED && config.predictive && rtcd_keep_watching(h.status, h.t, extension))
-      o.kind = RTCD_RAY_WATCHED;
+    o.kind = uint8_t(rtcd_line_kind(h.status, h.t, config.predictive, watches(config), extension));
     o.t = h.t;
     o.triangle = h.face;
     return o;
   }
+
+  // Watching serves only later walks, which full mode never makes; it
+  // belongs to the predictive logic and is off with it.
+  static bool watches(const Config& config) { return config.predictive && config.mode != Mode::full; }
 
   // How far from the target a vertex is watched. In automatic mode no point
   // moves farther than displacement_threshold relative to the target before
@@ -222,8 +217,7 @@ class CpuExecutor final : public RayExecutor {
       o.t = -out.t;
       return;
     }
-    // Watching serves only later walks, which full mode never makes.
-    if (config.mode == Mode::full) return;
+    if (!watches(config)) return;
     const double reach = watch_reach(config);
     if (!bounds.grown(reach).contains(Eigen::Vector3d(c.origin.x, c.origin.y, c.origin.z))) return;
     if (!walking) {

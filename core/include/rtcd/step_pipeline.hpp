@@ -51,7 +51,7 @@ struct RayOutcome {
   uint8_t status = 0;           // rtcd_line_status (iterative rays and volumes)
   uint8_t predictive_cast = 0;  // an outward ray was traced too (predictive, or a re-traced hit's entry face)
   uint8_t nearest_query = 0;    // a nearest-triangle query was made (neither ray met the target)
-  uint8_t retraced = 0;         // iterative: the walks could not be trusted (rtcd_walk_doubtful), traced again
+  uint8_t retraced = 0;         // iterative: the walks could not be trusted (rtcd_walked_kind), traced again
 };
 
 class RayExecutor {

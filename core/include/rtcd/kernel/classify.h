@@ -2,8 +2,8 @@
  * means for its source vertex. A vertex whose line leaves the target ahead of
  * it is inside (a contact); one whose line leaves the target behind it,
  * within distanceExtension, is about to penetrate and stays tracked; one
- * near the target that reports neither is still walked each step (it may
- * enter sideways) until it moves away. */
+ * near the target that reports neither is watched: still walked each step
+ * (it may enter sideways) until it moves away. */
 #ifndef RTCD_KERNEL_CLASSIFY_H
 #define RTCD_KERNEL_CLASSIFY_H
 
@@ -22,24 +22,32 @@ RTCD_INLINE int rtcd_classify(int status, float t, int predictive, float distanc
   return RTCD_RAY_DROPPED;
 }
 
-/* A walked ray that reports nothing stays watched unless its line now
- * leaves the target farther behind it than distanceExtension (moving away). */
-RTCD_INLINE int rtcd_keep_watching(int status, float t, float distance_extension) {
-  return !(status == RTCD_LINE_BEHIND && -t > distance_extension);
+/* A line status as a tracked ray's kind: rtcd_classify, except that a ray
+ * that reports nothing stays watched (when `watch`: only walks use it) unless
+ * its line leaves the target farther behind it than distanceExtension
+ * (moving away). */
+RTCD_INLINE int rtcd_line_kind(int status, float t, int predictive, int watch, float distance_extension) {
+  int kind = rtcd_classify(status, t, predictive, distance_extension);
+  if (kind == RTCD_RAY_DROPPED && watch && !(status == RTCD_LINE_BEHIND && -t > distance_extension))
+    kind = RTCD_RAY_WATCHED;
+  return kind;
 }
 
-/* Whether a walked ray is inside. The exit walk found where the line leaves
- * the target (HIT: ahead of the vertex); the entry walk, from the face the
- * line entered through behind the vertex, must find that crossing still
- * behind it. Returns PENETRATING, or DROPPED when the entry is now ahead (the
- * vertex backed out), or -1 when the walks cannot tell: the ray is traced
- * again in full. An entering crossing behind the origin found by the exit
- * walk also means the vertex passed into the target there: traced again. */
-RTCD_INLINE int rtcd_walked_inside(int exit_status, float exit_t, int entry_status, float entry_t) {
+/* The kind of a walked ray. The exit walk found where the line leaves the
+ * target (HIT: ahead of the vertex); the entry walk, from the face the line
+ * entered through behind the vertex, must find that crossing still behind
+ * it, or the vertex backed out (the target is ahead: watched). -1 when the
+ * walks cannot tell and the ray is traced again in full: a hit whose entry
+ * walk located no entering crossing (or had no entry face to start from),
+ * or an entering crossing behind the origin found by the exit walk (the
+ * vertex passed into the target there). */
+RTCD_INLINE int rtcd_walked_kind(int exit_status, float exit_t, int entry_status, float entry_t, int predictive,
+                                 int watch, float distance_extension) {
   if (exit_status == RTCD_LINE_FRONT && exit_t < 0.0f) return -1;
-  if (exit_status != RTCD_LINE_HIT) return RTCD_RAY_DROPPED;
+  if (exit_status != RTCD_LINE_HIT) return rtcd_line_kind(exit_status, exit_t, predictive, watch, distance_extension);
   if (entry_status != RTCD_LINE_FRONT) return -1;
-  return entry_t <= 0.0f ? RTCD_RAY_PENETRATING : RTCD_RAY_DROPPED;
+  if (entry_t <= 0.0f) return RTCD_RAY_PENETRATING;
+  return watch ? RTCD_RAY_WATCHED : RTCD_RAY_DROPPED;
 }
 
 #endif
