@@ -110,7 +110,7 @@ class CpuExecutor final : public RayExecutor {
     RayOutcome o;
     o.vertex = c.vertex;
     const Shape& target = *shapes_[job.target];
-    const float extension = float(config.distance_extension);
+    const float extension = float(job.limits.distance_extension);
     if (const Mesh* mesh = target.mesh()) {
       const auto normals = mesh->triangle_normals();
       if (job.iterative) {
@@ -120,7 +120,7 @@ class CpuExecutor final : public RayExecutor {
               rtcd_walk(&ray, reinterpret_cast<const rtcd_vec3*>(mesh->positions().data()),
                         reinterpret_cast<const rtcd_uint*>(mesh->triangles().data()),
                         reinterpret_cast<const rtcd_int*>(mesh->neighbors().data()), mesh->zero_area().data(), start,
-                        config.max_walk_steps);
+                        job.limits.max_walk_steps);
           o.walk_steps += w.steps;
           return w;
         };
@@ -129,7 +129,7 @@ class CpuExecutor final : public RayExecutor {
           // Watched since the full step, its nearest triangle not looked up
           // yet: done now that the pair walks.
           o.nearest_query = 1;
-          start = tracers_[job.target]->nearest(c.origin, float(watch_reach(config)));
+          start = tracers_[job.target]->nearest(c.origin, float(job.limits.watch_reach(config.mode)));
           if (start < 0) return o;  // dropped: nothing within reach
         }
         const rtcd_walk_result exit = walk(start);
@@ -140,7 +140,7 @@ class CpuExecutor final : public RayExecutor {
                                           watches(config), extension);
         if (kind < 0) {
           o.retraced = 1;
-          full_trace(*tracers_[job.target], normals, target.bounds(), c, config, true, o);
+          full_trace(*tracers_[job.target], normals, target.bounds(), c, job.limits, config, true, o);
           return o;
         }
         const bool located = exit.status == RTCD_LINE_HIT || exit.status == RTCD_LINE_BEHIND || exit.status == RTCD_LINE_FRONT;
@@ -150,7 +150,7 @@ class CpuExecutor final : public RayExecutor {
         if (kind == RTCD_RAY_PENETRATING) o.entry = entry.triangle;
         return o;
       }
-      full_trace(*tracers_[job.target], normals, target.bounds(), c, config, false, o);
+      full_trace(*tracers_[job.target], normals, target.bounds(), c, job.limits, config, false, o);
       return o;
     }
     const auto& shape = target.geometry();
@@ -173,13 +173,6 @@ class CpuExecutor final : public RayExecutor {
   // belongs to the predictive logic and is off with it.
   static bool watches(const Config& config) { return config.predictive && config.mode != Mode::full; }
 
-  // How far from the target a vertex is watched. In automatic mode no point
-  // moves farther than displacement_threshold relative to the target before
-  // the pair is traced in full again.
-  static double watch_reach(const Config& config) {
-    return config.mode == Mode::automatic ? config.displacement_threshold : config.distance_extension;
-  }
-
   // Full tracing of one mesh ray: the inward ray; if it does not leave the
   // target, the predictive ray; if neither meets it and the vertex is within
   // reach of the target's box, it is watched. What serves only later walks
@@ -187,8 +180,9 @@ class CpuExecutor final : public RayExecutor {
   // triangle) is found when the pair walks (`walking`: a walk's re-trace),
   // so full steps of pairs that are traced in full again cost no more.
   static void full_trace(const MeshTracer& tracer, std::span<const Eigen::Vector3f> normals, const Aabb& bounds,
-                         const Candidate& c, const Config& config, bool walking, RayOutcome& o) {
-    const float extension = float(config.distance_extension);
+                         const Candidate& c, const PairLimits& limits, const Config& config, bool walking,
+                         RayOutcome& o) {
+    const float extension = float(limits.distance_extension);
     auto leaves_through = [&](int32_t tri) { return rtcd_dot(c.direction, to_kernel(normals[tri])) > 0.0f; };
     o.kind = RTCD_RAY_DROPPED;
     o.triangle = -1;
@@ -218,7 +212,7 @@ class CpuExecutor final : public RayExecutor {
       return;
     }
     if (!watches(config)) return;
-    const double reach = watch_reach(config);
+    const double reach = limits.watch_reach(config.mode);
     if (!bounds.grown(reach).contains(Eigen::Vector3d(c.origin.x, c.origin.y, c.origin.z))) return;
     if (!walking) {
       o.kind = RTCD_RAY_WATCHED;  // triangle -1: looked up if the pair walks

@@ -286,10 +286,11 @@ void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const
   const Pose to_target = bodies_[target].pose.inverse() * bodies_[source].pose;
   job.rotation = to_target.orientation.toRotationMatrix();
   job.translation = to_target.position;
+  job.limits = {config_.displacement_threshold, config_.distance_extension, config_.max_walk_steps};
   job.overlap = shapes_[job.target]
                     .shape->bounds()
                     .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))
-                    .grown(config_.distance_extension);
+                    .grown(job.limits.distance_extension);
 }
 
 // Ranges per pair in input order (a's rays, then b's), then every record

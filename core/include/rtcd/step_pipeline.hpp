@@ -24,6 +24,22 @@ struct TrackedRay {
   int32_t entry;     // penetrating rays: the face the line enters through behind the vertex; -1 unknown
 };
 
+// A pair's limits for this step: the Config's value where it sets one, else
+// derived from the two shapes and the pair's motion (rtcd/limits.hpp).
+// Always distance_extension >= displacement_threshold.
+struct PairLimits {
+  double displacement_threshold = 0.0;
+  double distance_extension = 0.0;
+  uint32_t max_walk_steps = 1;
+
+  // How far from the target a vertex is watched. In automatic mode no point
+  // moves farther than displacement_threshold relative to the target before
+  // the pair is traced in full again; in iterative mode, the predictive reach.
+  double watch_reach(Mode mode) const {
+    return mode == Mode::automatic ? displacement_threshold : distance_extension;
+  }
+};
+
 // One direction of one pair: the source's rays against the target.
 struct RayJob {
   ShapeId source = 0, target = 0;
@@ -35,6 +51,7 @@ struct RayJob {
   // Candidate origins lie in this box (target frame); empty: no candidates.
   Aabb overlap;
   bool iterative = false;
+  PairLimits limits;
   // Iterative jobs: last step's rays, the walks' start triangles.
   std::span<const TrackedRay> tracked;
 };
