@@ -60,9 +60,11 @@ Config Knobs::config() const {
 
 void add_knobs(CLI::App& command, Knobs& k) {
   command.add_flag("--no-predictive", k.no_predictive, "Do not cast predictive rays");
-  command.add_option("--max-walk-steps", k.max_walk_steps, "Walk step limit [1, 1000000]");
-  command.add_option("--displacement-threshold", k.displacement_threshold, "Equation 2.1 threshold");
-  command.add_option("--distance-extension", k.distance_extension, "Predictive range and bounding-box growth");
+  command.add_option("--max-walk-steps", k.max_walk_steps, "Walk step limit [1, 1000000] (default: derived per pair)");
+  command.add_option("--displacement-threshold", k.displacement_threshold,
+                     "Equation 2.1 threshold (default: derived per pair)");
+  command.add_option("--distance-extension", k.distance_extension,
+                     "Predictive range and bounding-box growth (default: derived per pair)");
 }
 
 void warn_if_self_intersecting(const Shape& shape, const std::string& name) {

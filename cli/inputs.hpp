@@ -18,9 +18,10 @@ namespace rtcd::cli {
 // The accuracy knobs every subcommand that runs the narrow phase takes.
 struct Knobs {
   bool no_predictive = false;
-  uint32_t max_walk_steps = Config{}.max_walk_steps;
-  double displacement_threshold = Config{}.displacement_threshold;
-  double distance_extension = Config{}.distance_extension;
+  // Unset: derived per pair (rtcd/limits.hpp).
+  std::optional<uint32_t> max_walk_steps;
+  std::optional<double> displacement_threshold;
+  std::optional<double> distance_extension;
   Config config() const;  // the default Config with these knobs set
 };
 void add_knobs(CLI::App& command, Knobs& knobs);

@@ -25,6 +25,12 @@
 namespace rtcd::cli {
 namespace {
 
+// A limit the scene sets, or "derived" (per pair, rtcd/limits.hpp).
+template <class T>
+nlohmann::json limit_json(const std::optional<T>& value) {
+  return value ? nlohmann::json(*value) : nlohmann::json("derived");
+}
+
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
@@ -144,9 +150,9 @@ int run_scene(const RunOptions& o) {
         {"mode", to_string(scene.narrow.mode)},
         {"predictive", scene.narrow.predictive},
         {"projected", scene.narrow.projected},
-        {"max_walk_steps", scene.narrow.max_walk_steps},
-        {"displacement_threshold", scene.narrow.displacement_threshold},
-        {"distance_extension", scene.narrow.distance_extension},
+        {"max_walk_steps", limit_json(scene.narrow.max_walk_steps)},
+        {"displacement_threshold", limit_json(scene.narrow.displacement_threshold)},
+        {"distance_extension", limit_json(scene.narrow.distance_extension)},
         {"points_per_pair", scene.points_per_pair},
         {"solver_iterations", scene.solver_iterations},
         {"interpenetration_every", scene.interpenetration_every}}},

@@ -197,9 +197,10 @@ void dump(const std::filesystem::path& dir, const Shape& a, const Shape& b, cons
       std::fprintf(f, "step %zu pose %s: %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", s, name, p->position.x(),
                    p->position.y(), p->position.z(), p->orientation.w(), p->orientation.x(), p->orientation.y(),
                    p->orientation.z());
-  std::fprintf(f, "mode %s max_walk_steps %u distance_extension %.17g displacement_threshold %.17g predictive %d projected %d\n",
-               to_string(c.mode), c.max_walk_steps, c.distance_extension, c.displacement_threshold, c.predictive,
-               c.projected);
+  // -1: derived per pair.
+  std::fprintf(f, "mode %s max_walk_steps %lld distance_extension %.17g displacement_threshold %.17g predictive %d projected %d\n",
+               to_string(c.mode), c.max_walk_steps ? (long long)*c.max_walk_steps : -1LL,
+               c.distance_extension.value_or(-1.0), c.displacement_threshold.value_or(-1.0), c.predictive, c.projected);
   std::fclose(f);
 }
 
@@ -216,12 +217,15 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
   const auto pose_a = read_pose(r), pose_b = read_pose(r);
   if (!pose_a || !pose_b) return 0;
 
-  // Knobs within their documented ranges; the walk limit stays small so
-  // one input cannot walk for seconds.
+  // Knobs within their documented ranges, or derived per pair; the walk
+  // limit stays small so one input cannot walk for seconds (a derived one is
+  // at most the target's triangle count).
   Config config;
-  config.max_walk_steps = r.range<uint32_t>(1, 4096);
-  config.distance_extension = r.range<uint32_t>(0, 1u << 20) / 4096.0;
-  config.displacement_threshold = config.distance_extension * (r.range<uint16_t>(0, 65535) / 65535.0);
+  if (r.flag()) {
+    config.max_walk_steps = r.range<uint32_t>(1, 4096);
+    config.distance_extension = r.range<uint32_t>(0, 1u << 20) / 4096.0;
+    config.displacement_threshold = *config.distance_extension * (r.range<uint16_t>(0, 65535) / 65535.0);
+  }
   config.mode = std::array{Mode::full, Mode::iterative, Mode::automatic}[r.range<uint8_t>(0, 2)];
   config.predictive = r.flag();
   config.projected = r.flag();

@@ -161,9 +161,15 @@ class CpuExecutor final : public RayExecutor {
             ? rtcd_box_line(c.origin, c.direction, to_kernel(std::get<Box>(shape).half_extents.cast<float>().eval()))
             : rtcd_halfspace_line(c.origin, c.direction);
     // The line test is exact: a candidate neither inside nor about to enter
-    // is watched while it stays near, in full steps as in iterative ones.
+    // is watched while it stays near, in full steps as in iterative ones —
+    // also when its line meets the target farther than the extension but the
+    // vertex is within reach of the target's box, as for meshes.
     o.status = uint8_t(h.status);
-    o.kind = uint8_t(rtcd_line_kind(h.status, h.t, config.predictive, watches(config), extension));
+    int kind = rtcd_line_kind(h.status, h.t, config.predictive, watches(config), extension);
+    if (kind == RTCD_RAY_DROPPED && watches(config) &&
+        target.bounds().grown(job.limits.watch_reach(config.mode)).contains(Eigen::Vector3d(c.origin.x, c.origin.y, c.origin.z)))
+      kind = RTCD_RAY_WATCHED;
+    o.kind = uint8_t(kind);
     o.t = h.t;
     o.triangle = h.face;
     return o;

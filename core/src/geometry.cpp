@@ -65,15 +65,15 @@ Mode parse_mode(const std::string& text) {
 
 void Config::validate() const {
   auto fail = [](const std::string& what) { throw ConfigError(what); };
-  if (max_walk_steps < 1 || max_walk_steps > 1'000'000)
-    fail("max_walk_steps = " + std::to_string(max_walk_steps) + " is outside [1, 1000000]");
-  if (!std::isfinite(distance_extension) || distance_extension < 0 || distance_extension >= 1e30)
-    fail("distance_extension = " + std::to_string(distance_extension) + " is outside [0, 1e30)");
-  if (!std::isfinite(displacement_threshold) || displacement_threshold < 0)
-    fail("displacement_threshold = " + std::to_string(displacement_threshold) + " must be finite and >= 0");
-  if (displacement_threshold > distance_extension)
-    fail("displacement_threshold (" + std::to_string(displacement_threshold) +
-         ") must not exceed distance_extension (" + std::to_string(distance_extension) +
+  if (max_walk_steps && (*max_walk_steps < 1 || *max_walk_steps > 1'000'000))
+    fail("max_walk_steps = " + std::to_string(*max_walk_steps) + " is outside [1, 1000000]");
+  if (distance_extension && (!std::isfinite(*distance_extension) || *distance_extension < 0 || *distance_extension >= 1e30))
+    fail("distance_extension = " + std::to_string(*distance_extension) + " is outside [0, 1e30)");
+  if (displacement_threshold && (!std::isfinite(*displacement_threshold) || *displacement_threshold < 0))
+    fail("displacement_threshold = " + std::to_string(*displacement_threshold) + " must be finite and >= 0");
+  if (displacement_threshold && distance_extension && *displacement_threshold > *distance_extension)
+    fail("displacement_threshold (" + std::to_string(*displacement_threshold) +
+         ") must not exceed distance_extension (" + std::to_string(*distance_extension) +
          "): predictive rays only cover motions up to distance_extension");
 }
 

@@ -40,8 +40,10 @@ struct ShapeEntry {
     Eigen::Vector3d normal, point;  // meshes: (v1 - v0) x (v2 - v0) and v0, per triangle
   };
   std::vector<Plane> planes;
+  ShapeScale scale;  // measured only when some limit is derived
 
-  explicit ShapeEntry(std::shared_ptr<const Shape> s) : shape(std::move(s)) {
+  ShapeEntry(std::shared_ptr<const Shape> s, bool measure) : shape(std::move(s)) {
+    if (measure) scale = measure_scale(*shape);
     for (const Eigen::Vector3f& d : shape->sources().directions)
       directions.push_back(d.isZero() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(d.cast<double>().normalized()));
     if (const Mesh* m = shape->mesh()) {
@@ -118,7 +120,11 @@ class PipelineNarrowPhase final : public NarrowPhase {
  public:
   PipelineNarrowPhase(std::string name, std::vector<std::string> devices, std::unique_ptr<RayExecutor> executor,
                       const Config& config)
-      : NarrowPhase(config), name_(std::move(name)), devices_(std::move(devices)), executor_(std::move(executor)) {}
+      : NarrowPhase(config),
+        name_(std::move(name)),
+        devices_(std::move(devices)),
+        executor_(std::move(executor)),
+        derive_(derives_limits(config_)) {}
 
   std::string name() const override { return name_; }
   std::vector<std::string> devices() const override { return devices_; }
@@ -126,13 +132,13 @@ class PipelineNarrowPhase final : public NarrowPhase {
   ShapeId add_shape(std::shared_ptr<const Shape> shape) override {
     if (!shape) throw UsageError("add_shape: null shape");
     executor_->add_shape(shape);
-    shapes_.emplace_back(std::move(shape));
+    shapes_.emplace_back(std::move(shape), derive_);
     return ShapeId(shapes_.size() - 1);
   }
 
   BodyId add_body(ShapeId shape, const Pose& pose) override {
     if (shape >= shapes_.size()) throw UsageError("add_body: unknown shape " + std::to_string(shape));
-    bodies_.push_back({shape, checked(pose), true});
+    bodies_.push_back({shape, checked(pose), true, {}, 0});
     return BodyId(bodies_.size() - 1);
   }
 
@@ -153,15 +159,20 @@ class PipelineNarrowPhase final : public NarrowPhase {
     ShapeId shape;
     Pose pose;
     bool alive;
+    Pose previous;      // the pose at the last step the body was in a pair,
+    uint64_t seen = 0;  // that step (0: never): motions are measured between consecutive steps
   };
   struct PairState {
     Pose relative_at_full;               // lower id's frame in the higher id's frame
     std::vector<TrackedRay> tracked[2];  // [0]: lower id's rays into the higher, [1]: the reverse
     uint64_t step = 0;                   // last step the pair was asked for
   };
-  // Where a pair's two jobs are: jobs_[list][first] (a's rays), [first + 1] (b's).
+  // A pair's step: its state and limits, and where its two jobs are:
+  // jobs_[list][first] (a's rays), [first + 1] (b's).
   struct PairWork {
     PairState* state;
+    bool fresh;
+    PairLimits limits;
     uint32_t list, first;
     PairTally tally;
   };
@@ -172,6 +183,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   }
   void validate(std::span<const BodyPair> pairs);
   void prepare(std::span<const BodyPair> pairs, StepResult& out);
+  void decide(BodyPair pair, PairWork& work) const;
   void place(RayJob& job, BodyId source, BodyId target) const;
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
@@ -180,6 +192,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::string name_;
   std::vector<std::string> devices_;
   std::unique_ptr<RayExecutor> executor_;
+  bool derive_;  // some limit follows the scene: shapes are measured, motions tracked
   std::vector<ShapeEntry> shapes_;
   std::vector<Body> bodies_;
   std::unordered_map<uint64_t, PairState> states_;
@@ -227,7 +240,7 @@ void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& ou
   out.stats.seconds_gather = lap();
 }
 
-// Pair state, mode and both jobs per pair.
+// Pair state, limits, mode and both jobs per pair.
 void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& out) {
   ++step_;
   jobs_[0].clear();
@@ -235,41 +248,38 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
   work_.resize(pairs.size());
   out.pairs.resize(pairs.size());
   for (size_t i = 0; i < pairs.size(); ++i) {
+    auto [it, fresh] = states_.try_emplace(pair_key(pairs[i].a, pairs[i].b));
+    it->second.step = step_;
+    work_[i].state = &it->second;
+    work_[i].fresh = fresh;
+  }
+  std::erase_if(states_, [this](const auto& kv) { return kv.second.step != step_; });
+
+  // Limits and mode touch only the pair's own state: on several threads once
+  // there are enough pairs.
+  for_each_index(pairs.size(), pairs.size() >= kParallelPairs, [&](size_t i) { decide(pairs[i], work_[i]); });
+
+  for (size_t i = 0; i < pairs.size(); ++i) {
     const BodyPair p = pairs[i];
-    const BodyId lo = std::min(p.a, p.b), hi = std::max(p.a, p.b);
-    const Pose relative = bodies_[hi].pose.inverse() * bodies_[lo].pose;
-    auto [it, fresh] = states_.try_emplace(pair_key(lo, hi));
-    PairState& state = it->second;
-    state.step = step_;
-    bool iterative = false;
-    if (!fresh && config_.mode == Mode::iterative) {
-      iterative = true;
-    } else if (!fresh && config_.mode == Mode::automatic) {
-      const double radius = std::max(shapes_[bodies_[lo].shape].shape->radius(), shapes_[bodies_[hi].shape].shape->radius());
-      iterative = max_displacement(state.relative_at_full, relative, radius) <= config_.displacement_threshold;
-      if (!iterative) ++out.stats.fallbacks_to_full;
-    }
-    if (!iterative) {
-      state.relative_at_full = relative;
-      state.tracked[0].clear();
-      state.tracked[1].clear();
-    }
+    PairWork& w = work_[i];
+    const bool iterative = w.list == 1;
+    out.stats.fallbacks_to_full += !w.fresh && config_.mode == Mode::automatic && !iterative;
     PairResult& pr = out.pairs[i];
     pr = PairResult{};
     pr.pair = p;
     pr.mode = iterative ? PairMode::iterative : PairMode::full;
     ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
-    const uint32_t list = iterative ? 1 : 0;
-    work_[i] = {&state, list, uint32_t(jobs_[list].size()), {}};
+    w.first = uint32_t(jobs_[w.list].size());
+    w.tally = {};
     for (const BodyId source : {p.a, p.b}) {
-      RayJob& job = jobs_[list].emplace_back();
+      RayJob& job = jobs_[w.list].emplace_back();
       job.source = bodies_[source].shape;
       job.target = bodies_[source == p.a ? p.b : p.a].shape;
       job.iterative = iterative;
-      job.tracked = state.tracked[source == lo ? 0 : 1];
+      job.limits = w.limits;
+      job.tracked = w.state->tracked[source == std::min(p.a, p.b) ? 0 : 1];
     }
   }
-  std::erase_if(states_, [this](const auto& kv) { return kv.second.step != step_; });
 
   // Each job's transform and candidate box: independent per pair, so on
   // several threads once there are enough pairs.
@@ -278,6 +288,42 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     place(jobs_[w.list][w.first], pairs[i].a, pairs[i].b);
     place(jobs_[w.list][w.first + 1], pairs[i].b, pairs[i].a);
   });
+
+  if (derive_) {
+    for (const BodyPair& p : pairs)
+      for (const BodyId id : {p.a, p.b}) {
+        bodies_[id].previous = bodies_[id].pose;
+        bodies_[id].seen = step_;
+      }
+  }
+}
+
+// The pair's limits and mode: new pairs are full; Mode::automatic walks while
+// equation 2.1 since the last full step stays within the pair's threshold.
+void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
+  const BodyId lo = std::min(p.a, p.b), hi = std::max(p.a, p.b);
+  const Body &low = bodies_[lo], &high = bodies_[hi];
+  const Pose relative = high.pose.inverse() * low.pose;
+  const double radius = std::max(shapes_[low.shape].shape->radius(), shapes_[high.shape].shape->radius());
+  if (derive_) {
+    double motion = 0.0;
+    if (low.seen > 0 && low.seen + 1 == step_ && high.seen > 0 && high.seen + 1 == step_)
+      motion = max_displacement(high.previous.inverse() * low.previous, relative, radius);
+    w.limits = derive_limits(config_, shapes_[low.shape].scale, shapes_[high.shape].scale, motion);
+  } else {
+    w.limits = {*config_.displacement_threshold, *config_.distance_extension, *config_.max_walk_steps};
+  }
+  PairState& state = *w.state;
+  bool iterative = false;
+  if (!w.fresh && config_.mode == Mode::iterative) iterative = true;
+  if (!w.fresh && config_.mode == Mode::automatic)
+    iterative = max_displacement(state.relative_at_full, relative, radius) <= w.limits.displacement_threshold;
+  if (!iterative) {
+    state.relative_at_full = relative;
+    state.tracked[0].clear();
+    state.tracked[1].clear();
+  }
+  w.list = iterative ? 1 : 0;
 }
 
 // Each direction from the two poses, not one from the other's inverse:
@@ -286,7 +332,6 @@ void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const
   const Pose to_target = bodies_[target].pose.inverse() * bodies_[source].pose;
   job.rotation = to_target.orientation.toRotationMatrix();
   job.translation = to_target.position;
-  job.limits = {config_.displacement_threshold, config_.distance_extension, config_.max_walk_steps};
   job.overlap = shapes_[job.target]
                     .shape->bounds()
                     .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))

@@ -20,6 +20,13 @@
 namespace rtcd::experiments {
 namespace {
 
+std::string limit_text(const std::optional<double>& value) {
+  if (!value) return "derived per pair";
+  std::ostringstream s;
+  s << *value;
+  return s.str();
+}
+
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
@@ -295,8 +302,10 @@ std::string run_bench(const BenchOptions& o) {
   configs.push_back(ours("iterative embree", "embree", Mode::iterative, 1));
   // The accuracy/time curve: the automatic mode's threshold swept.
   std::vector<double> thresholds;
-  for (double t : {0.25, 0.5, 2.0})
-    if (t * base.displacement_threshold <= base.distance_extension) thresholds.push_back(t * base.displacement_threshold);
+  if (base.displacement_threshold)  // a derived threshold differs per pair: nothing to scale
+    for (double t : {0.25, 0.5, 2.0})
+      if (t * *base.displacement_threshold <= base.distance_extension.value_or(HUGE_VAL))
+        thresholds.push_back(t * *base.displacement_threshold);
   for (double t : thresholds) configs.push_back(ours("auto embree, threshold " + fixed(t, 3), "embree", Mode::automatic, 1, t));
   if (cores > 1) {
     configs.push_back(ours("full embree, " + n_threads, "embree", Mode::full, cores));
@@ -389,13 +398,13 @@ std::string run_bench(const BenchOptions& o) {
   report << "Scene `" << shown(scene.path) << "`: " << recording.steps().back().bodies << " bodies at the end (ground included), "
          << triangles_at_end << " triangles; " << steps << " steps of " << fixed(scene.time_step * 1e3, 2)
          << " ms; up to " << peak_pairs << " broad-phase pairs per step (" << recording.steps().back().pairs
-         << " on the last). Distance extension " << base.distance_extension << ", displacement threshold "
-         << base.displacement_threshold << ", " << scene.points_per_pair
+         << " on the last). Distance extension " << limit_text(base.distance_extension) << ", displacement threshold "
+         << limit_text(base.displacement_threshold) << ", " << scene.points_per_pair
          << " contact points per pair reach the solver (the deepest ray, then the farthest-point spread).\n\n";
   report << "Largest per-step motion of a surface point: " << fixed(motion.largest, 4) << " (" << fixed(motion.speed, 2)
          << " per second, step " << motion.step << ", body " << motion.body << ") against the distance extension "
-         << motion.distance_extension << ": "
-         << (motion.largest > motion.distance_extension
+         << limit_text(motion.distance_extension) << ": "
+         << (motion.largest > motion.distance_extension.value_or(0.0)
                  ? "larger, so a predictive ray cannot see every impact one step ahead; those are found by full "
                    "tracing once they penetrate."
                  : "within it, so predictive rays see every impact one step ahead.")

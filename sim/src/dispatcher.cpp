@@ -195,7 +195,9 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
     held.manifolds.pop_back();
   }
   while (held.manifolds.size() < needed) held.manifolds.push_back(getNewManifold(a, b));
-  const double extension = narrow_.config().distance_extension;
+  // Points lie within the pair's distance extension; a derived one differs
+  // per pair, and every point written is meant for the solver.
+  const double extension = narrow_.config().distance_extension.value_or(BT_LARGE_FLOAT);
   for (btPersistentManifold* m : held.manifolds) {
     m->clearManifold();
     m->setBodies(a, b);

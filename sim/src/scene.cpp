@@ -301,11 +301,13 @@ Scene parse_scene(std::string_view json_text, const std::string& path, const Sce
   } catch (const Error&) {
     np.fail(np.key("mode"), "is \"" + mode + "\", must be full, iterative or auto");
   }
-  s.narrow.max_walk_steps = uint32_t(np.integer("max_walk_steps", s.narrow.max_walk_steps, 1, 1'000'000));
-  s.narrow.distance_extension = np.number("distance_extension", s.narrow.distance_extension, 0.0, 1e6);
-  s.narrow.displacement_threshold =
-      np.number("displacement_threshold", std::min(s.narrow.displacement_threshold, s.narrow.distance_extension), 0.0, 1e6);
-  if (s.narrow.displacement_threshold > s.narrow.distance_extension)
+  // Limits the scene leaves out follow it per pair (rtcd/limits.hpp).
+  if (np.has("max_walk_steps")) s.narrow.max_walk_steps = uint32_t(np.integer("max_walk_steps", 0, 1, 1'000'000));
+  if (np.has("distance_extension")) s.narrow.distance_extension = np.number("distance_extension", 0.0, 0.0, 1e6);
+  if (np.has("displacement_threshold"))
+    s.narrow.displacement_threshold = np.number("displacement_threshold", 0.0, 0.0, 1e6);
+  if (s.narrow.displacement_threshold && s.narrow.distance_extension &&
+      *s.narrow.displacement_threshold > *s.narrow.distance_extension)
     np.fail(np.key("displacement_threshold"), "must not exceed narrow_phase.distance_extension");
   s.narrow.predictive = s.has(Effect::predictive);
   s.narrow.projected = s.has(Effect::projected);

@@ -1,5 +1,6 @@
 // The simulation host: a Bullet world whose collision step is rtcd's batch
 // dispatcher, stages assembled from the scene's effects.
+#include "rtcd/limits.hpp"
 #include "rtcd/sim/simulation.hpp"
 
 #include <cmath>
@@ -244,12 +245,14 @@ Simulation::Impl::~Impl() {
 }
 
 void Simulation::Impl::make_kinds() {
-  const double grow = 0.5 * scene.narrow.distance_extension;  // two bodies within the extension overlap
   const auto shapes = make_shapes(scene, &warnings);
   for (size_t i = 0; i < scene.bodies.size(); ++i) {
     const BodySpec& spec = scene.bodies[i];
     Kind k;
     k.shape = shapes[i];
+    // Two bodies within the extension overlap; a derived one is at least
+    // the smaller body's resting extension, which the smaller box's growth covers.
+    const double grow = 0.5 * scene.narrow.distance_extension.value_or(resting_extension(k.shape->radius()));
     if (const Mesh* m = k.shape->mesh()) k.render = render_mesh(*m);
     else if (spec.sphere) k.render = render_mesh(gen::icosphere(*spec.sphere, 3));
     else k.render = render_mesh(gen::box(*spec.box));

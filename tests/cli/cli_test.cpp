@@ -113,7 +113,7 @@ TEST_F(CliFiles, EveryBadInputExitsWith2AndOneClearLine) {
       {"query " + box + " " + box + " --pose-b \"1 0 0 0 0 0 0\"", "quaternion"},
       {"query " + box + " " + box + " --mode sometimes", "unknown mode"},
       {"query " + box + " " + box + " --backend warp", "available"},
-      {"query " + box + " " + box + " --displacement-threshold 0.5", "must not exceed"},
+      {"query " + box + " " + box + " --displacement-threshold 0.5 --distance-extension 0.1", "must not exceed"},
       {"query " + box + " " + box + " --max-walk-steps 0", "max_walk_steps"},
       {"query " + box + " " + box + " --sequence " + bad_json, "not valid JSON"},
       {"query " + box + " " + box + " --sequence " + short_pose, "expected 7 numbers"},

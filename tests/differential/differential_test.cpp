@@ -82,7 +82,10 @@ TEST_P(Differential, BoundsHold) {
     EXPECT_LE(s.max_relative_depth_error, 1e-4);
     report_first(family, r, o, [](const PairMetrics& m) { return m.max_relative_depth_error > 1e-4; }, "depth error");
   } else {
-    EXPECT_EQ(s.iterative_pairs, s.pairs) << "every judged step must walk";
+    // The derived threshold may send a pair on a thin body back to full
+    // tracing before the judged step (the price, reported as the full-step
+    // rate); most judged steps still walk, so the bounds below judge walks.
+    EXPECT_GE(s.iterative_pairs, s.pairs / 2) << "most judged steps must walk";
     EXPECT_LE(s.missed_rate(), 0.005) << s.missed << " of " << s.deep << " deep origins missed";
     // A walk cannot see a concavity's gap open between the faces it tracks
     // (docs/ARCHITECTURE.md): a few false rays in a million, never more.

@@ -328,7 +328,7 @@ TEST_P(Robustness, ConcaveTrapForTheWalk) {
   rig.step(at(1.0, 0.5, 0), Pose{});
   for (int k = 1; k <= 20; ++k) {
     const StepResult r = rig.step(at(1.0 - 0.1 * k, 0.5, 0), Pose{});
-    EXPECT_LE(r.stats.walk_steps, size_t(c.max_walk_steps) * r.stats.rays_iterative);
+    EXPECT_LE(r.stats.walk_steps, size_t(*c.max_walk_steps) * r.stats.rays_iterative);
   }
   Config full = c;
   full.mode = Mode::full;

@@ -29,10 +29,8 @@ std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, 
     settings.push_back({"max_walk_steps", std::to_string(steps), RunMode::iterative,
                         [steps](Config& c) { c.max_walk_steps = steps; }});
   for (double t : {0.005, 0.01, 0.02, 0.1})
-    settings.push_back({"displacement_threshold", text(t), RunMode::iterative, [t](Config& c) {
-                          c.displacement_threshold = t;
-                          c.distance_extension = std::max(c.distance_extension, t);
-                        }});
+    settings.push_back({"displacement_threshold", text(t), RunMode::iterative,
+                        [t](Config& c) { c.displacement_threshold = t; }});  // the derived extension keeps >= t
   for (double e : {0.05, 0.2, 0.4})
     settings.push_back({"distance_extension", text(e), RunMode::iterative,
                         [e](Config& c) { c.distance_extension = e; }});

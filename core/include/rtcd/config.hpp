@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace rtcd {
@@ -17,22 +18,30 @@ const char* to_string(Mode mode);
 Mode parse_mode(const std::string& text);  // "full" | "iterative" | "auto"; ConfigError otherwise
 
 struct Config {
+  // The three limits below follow the scene unless set: left empty, each is
+  // derived per pair and step from the two shapes' sizes, thickness and
+  // triangle size and the pair's motion since the last step (rtcd/limits.hpp
+  // gives the rules). A value set here applies to every pair.
+
   // Most triangles one walk visits before it gives up (Algorithm 1's max).
-  // Range [1, 1'000'000]. Default 32. Cost: linear in the steps walks take;
-  // too low loses rays that moved across many triangles.
-  uint32_t max_walk_steps = 32;
+  // Range [1, 1'000'000]. Derived: enough to cross four times the distance a
+  // walk may have to cover, at least 32. Cost: linear in the steps walks
+  // take; too low loses rays that moved across many triangles.
+  std::optional<uint32_t> max_walk_steps;
 
   // Relative motion (equation 2.1, in length units) since a pair's last full
-  // step above which the pair is traced in full again. Range [0, distance_extension].
-  // Default 0.05. Cost: higher keeps pairs iterative longer (cheaper) but
-  // walks lose more rays on concave regions.
-  double displacement_threshold = 0.05;
+  // step above which the pair is traced in full again. Range [0,
+  // distance_extension]. Derived: a quarter of the thinner body's thickness.
+  // Cost: higher keeps pairs iterative longer (cheaper) but walks lose more
+  // rays on concave regions.
+  std::optional<double> displacement_threshold;
 
   // How far outside the other body a vertex is still tracked by a predictive
   // ray, and how much both bounding boxes grow before selecting candidate
-  // vertices. Range [0, 1e30), and >= displacement_threshold. Default 0.1.
-  // Cost: more candidate vertices and longer predictive rays.
-  double distance_extension = 0.1;
+  // vertices. Range [0, 1e30), and >= displacement_threshold. Derived: a
+  // fifth of the smaller body's radius, or twice the pair's last motion if
+  // that is more (at most the radius). Cost: more candidate vertices and longer predictive rays.
+  std::optional<double> distance_extension;
 
   // Cast predictive rays so vertices about to penetrate are tracked by the
   // iterative walk (section 2.1.3). Default on. Cost: one short extra ray per

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/limits.hpp"
 #include "rtcd/narrow_phase.hpp"
 
 namespace rtcd {
@@ -22,22 +23,6 @@ struct TrackedRay {
   int32_t triangle;  // where the next walk starts (the exit face of a penetrating ray); -1: a
                      // watched vertex whose nearest triangle is looked up when the pair walks
   int32_t entry;     // penetrating rays: the face the line enters through behind the vertex; -1 unknown
-};
-
-// A pair's limits for this step: the Config's value where it sets one, else
-// derived from the two shapes and the pair's motion (rtcd/limits.hpp).
-// Always distance_extension >= displacement_threshold.
-struct PairLimits {
-  double displacement_threshold = 0.0;
-  double distance_extension = 0.0;
-  uint32_t max_walk_steps = 1;
-
-  // How far from the target a vertex is watched. In automatic mode no point
-  // moves farther than displacement_threshold relative to the target before
-  // the pair is traced in full again; in iterative mode, the predictive reach.
-  double watch_reach(Mode mode) const {
-    return mode == Mode::automatic ? displacement_threshold : distance_extension;
-  }
 };
 
 // One direction of one pair: the source's rays against the target.

@@ -36,7 +36,7 @@ struct Motion {
   double largest = 0, speed = 0;  // per step, and as a speed (largest / time step)
   uint64_t step = 0;
   uint32_t body = 0;
-  double distance_extension = 0;
+  std::optional<double> distance_extension;  // the scene's; unset: derived per pair
 };
 Motion largest_motion(const sim::Recording& recording);
 

@@ -1,0 +1,95 @@
+// Per-pair limits derived from the scene (the rules are in limits.hpp).
+#include "rtcd/limits.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace rtcd {
+namespace {
+
+// Distance along o + t d (t > 0) to the nearest triangle not touching vertex
+// `skip`, in double; infinity when nothing is met.
+double self_ray_length(const Mesh& mesh, uint32_t skip, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
+  double best = std::numeric_limits<double>::infinity();
+  const auto positions = mesh.positions();
+  for (const Mesh::Triangle& tri : mesh.triangles()) {
+    if (tri[0] == skip || tri[1] == skip || tri[2] == skip) continue;
+    const Eigen::Vector3d a = positions[tri[0]].cast<double>();
+    const Eigen::Vector3d e1 = positions[tri[1]].cast<double>() - a, e2 = positions[tri[2]].cast<double>() - a;
+    const Eigen::Vector3d p = d.cross(e2);
+    const double det = e1.dot(p);
+    if (det == 0.0) continue;
+    const Eigen::Vector3d s = o - a;
+    const double u = s.dot(p) / det;
+    if (u < 0.0 || u > 1.0) continue;
+    const Eigen::Vector3d q = s.cross(e1);
+    const double v = d.dot(q) / det;
+    if (v < 0.0 || u + v > 1.0) continue;
+    const double t = e2.dot(q) / det;
+    if (t > 0.0) best = std::min(best, t);
+  }
+  return best;
+}
+
+ShapeScale measure_mesh(const Mesh& mesh, const RaySources& sources, double radius) {
+  ShapeScale scale;
+  scale.radius = radius;
+  double edges = 0.0;
+  const auto positions = mesh.positions();
+  for (const Mesh::Triangle& tri : mesh.triangles())
+    for (int k = 0; k < 3; ++k) edges += (positions[tri[(k + 1) % 3]] - positions[tri[k]]).cast<double>().norm();
+  scale.edge = edges / (3.0 * double(mesh.triangle_count()));
+  scale.triangles = uint32_t(mesh.triangle_count());
+
+  const size_t vertices = sources.origins.size();
+  const size_t samples = std::min<size_t>(vertices, 256);
+  std::vector<double> lengths;
+  for (size_t k = 0; k < samples; ++k) {
+    const uint32_t v = uint32_t(k * vertices / samples);
+    if (sources.directions[v].isZero()) continue;
+    const double t = self_ray_length(mesh, v, sources.origins[v].cast<double>(),
+                                     sources.directions[v].cast<double>().normalized());
+    if (std::isfinite(t)) lengths.push_back(t);
+  }
+  if (lengths.empty()) {
+    scale.thickness = 2.0 * radius;  // open or degenerate: no ray leaves it
+  } else {
+    const auto tenth = lengths.begin() + ptrdiff_t(lengths.size() / 10);
+    std::nth_element(lengths.begin(), tenth, lengths.end());
+    scale.thickness = *tenth;
+  }
+  return scale;
+}
+
+}  // namespace
+
+ShapeScale measure_scale(const Shape& shape) {
+  if (const Mesh* mesh = shape.mesh()) return measure_mesh(*mesh, shape.sources(), shape.radius());
+  ShapeScale scale;
+  scale.radius = shape.radius();
+  if (const auto* sphere = std::get_if<Sphere>(&shape.geometry())) scale.thickness = 2.0 * sphere->radius;
+  if (const auto* box = std::get_if<Box>(&shape.geometry())) scale.thickness = 2.0 * box->half_extents.minCoeff();
+  return scale;
+}
+
+PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeScale& b, double motion) {
+  const double size = a.radius <= 0.0 ? b.radius : b.radius <= 0.0 ? a.radius : std::min(a.radius, b.radius);
+  const double thickness = std::min({a.thickness, b.thickness, 2.0 * size});
+  PairLimits l;
+  l.distance_extension = config.distance_extension.value_or(std::max(resting_extension(size), std::min(2.0 * motion, size)));
+  l.displacement_threshold = config.displacement_threshold.value_or(std::min(l.distance_extension, thickness / 4.0));
+  if (!config.distance_extension) l.distance_extension = std::max(l.distance_extension, l.displacement_threshold);
+  if (config.max_walk_steps) {
+    l.max_walk_steps = *config.max_walk_steps;
+  } else {
+    const double edge = std::min(a.edge, b.edge);
+    const double reach = 4.0 * std::max(2.0 * motion, l.displacement_threshold);
+    const double steps = std::isfinite(edge) && edge > 0.0 ? std::ceil(reach / edge) : 0.0;
+    const double most = std::max(32.0, double(std::max(a.triangles, b.triangles)));
+    l.max_walk_steps = uint32_t(std::clamp(steps, 32.0, std::min(most, 1'000'000.0)));
+  }
+  return l;
+}
+
+}  // namespace rtcd
