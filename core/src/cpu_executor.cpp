@@ -137,7 +137,8 @@ class CpuExecutor final : public RayExecutor {
         rtcd_walk_result entry{RTCD_LINE_MISS, -1, 0.0f, 0};
         if (exit.status == RTCD_LINE_HIT && c.entry >= 0) entry = walk(c.entry);
         const int kind = rtcd_walked_kind(exit.status, exit.t, entry.status, entry.t, config.predictive,
-                                          watches(config), extension);
+                                          watches(config), within_reach(target.bounds(), job.limits, config, c),
+                                          extension);
         if (kind < 0) {
           o.retraced = 1;
           full_trace(*tracers_[job.target], normals, target.bounds(), c, job.limits, config, true, o);
@@ -161,15 +162,10 @@ class CpuExecutor final : public RayExecutor {
             ? rtcd_box_line(c.origin, c.direction, to_kernel(std::get<Box>(shape).half_extents.cast<float>().eval()))
             : rtcd_halfspace_line(c.origin, c.direction);
     // The line test is exact: a candidate neither inside nor about to enter
-    // is watched while it stays near, in full steps as in iterative ones —
-    // also when its line meets the target farther than the extension but the
-    // vertex is within reach of the target's box, as for meshes.
+    // is watched while it stays near, in full steps as in iterative ones.
     o.status = uint8_t(h.status);
-    int kind = rtcd_line_kind(h.status, h.t, config.predictive, watches(config), extension);
-    if (kind == RTCD_RAY_DROPPED && watches(config) &&
-        target.bounds().grown(job.limits.watch_reach(config.mode)).contains(Eigen::Vector3d(c.origin.x, c.origin.y, c.origin.z)))
-      kind = RTCD_RAY_WATCHED;
-    o.kind = uint8_t(kind);
+    o.kind = uint8_t(rtcd_line_kind(h.status, h.t, config.predictive, watches(config),
+                                    within_reach(target.bounds(), job.limits, config, c), extension));
     o.t = h.t;
     o.triangle = h.face;
     return o;
@@ -178,6 +174,12 @@ class CpuExecutor final : public RayExecutor {
   // Watching serves only later walks, which full mode never makes; it
   // belongs to the predictive logic and is off with it.
   static bool watches(const Config& config) { return config.predictive && config.mode != Mode::full; }
+
+  // Whether a vertex is within the watch reach of the target's box: near
+  // enough to enter before the pair is traced in full again.
+  static bool within_reach(const Aabb& bounds, const PairLimits& limits, const Config& config, const Candidate& c) {
+    return bounds.grown(limits.watch_reach(config.mode)).contains(Eigen::Vector3d(c.origin.x, c.origin.y, c.origin.z));
+  }
 
   // Full tracing of one mesh ray: the inward ray; if it does not leave the
   // target, the predictive ray; if neither meets it and the vertex is within
@@ -217,15 +219,13 @@ class CpuExecutor final : public RayExecutor {
       o.t = -out.t;
       return;
     }
-    if (!watches(config)) return;
-    const double reach = limits.watch_reach(config.mode);
-    if (!bounds.grown(reach).contains(Eigen::Vector3d(c.origin.x, c.origin.y, c.origin.z))) return;
+    if (!watches(config) || !within_reach(bounds, limits, config, c)) return;
     if (!walking) {
       o.kind = RTCD_RAY_WATCHED;  // triangle -1: looked up if the pair walks
       return;
     }
     o.nearest_query = 1;
-    const int32_t near = tracer.nearest(c.origin, float(reach));
+    const int32_t near = tracer.nearest(c.origin, float(limits.watch_reach(config.mode)));
     if (near >= 0) {
       o.kind = RTCD_RAY_WATCHED;
       o.triangle = near;

@@ -5,29 +5,22 @@
 #include <cmath>
 #include <vector>
 
+#include "rtcd/kernel/locate.h"
+
 namespace rtcd {
 namespace {
 
-// Distance along o + t d (t > 0) to the nearest triangle not touching vertex
-// `skip`, in double; infinity when nothing is met.
-double self_ray_length(const Mesh& mesh, uint32_t skip, const Eigen::Vector3d& o, const Eigen::Vector3d& d) {
-  double best = std::numeric_limits<double>::infinity();
-  const auto positions = mesh.positions();
+// Distance along the ray to the nearest triangle not touching vertex
+// `skip`, through the kernel's ray/triangle location; infinity when nothing
+// is met ahead.
+double self_ray_length(const Mesh& mesh, uint32_t skip, const rtcd_ray& ray) {
+  float best = std::numeric_limits<float>::infinity();
+  const auto p = mesh.positions();
+  auto v = [&](uint32_t i) { return rtcd_v3(p[i].x(), p[i].y(), p[i].z()); };
   for (const Mesh::Triangle& tri : mesh.triangles()) {
     if (tri[0] == skip || tri[1] == skip || tri[2] == skip) continue;
-    const Eigen::Vector3d a = positions[tri[0]].cast<double>();
-    const Eigen::Vector3d e1 = positions[tri[1]].cast<double>() - a, e2 = positions[tri[2]].cast<double>() - a;
-    const Eigen::Vector3d p = d.cross(e2);
-    const double det = e1.dot(p);
-    if (det == 0.0) continue;
-    const Eigen::Vector3d s = o - a;
-    const double u = s.dot(p) / det;
-    if (u < 0.0 || u > 1.0) continue;
-    const Eigen::Vector3d q = s.cross(e1);
-    const double v = d.dot(q) / det;
-    if (v < 0.0 || u + v > 1.0) continue;
-    const double t = e2.dot(q) / det;
-    if (t > 0.0) best = std::min(best, t);
+    const rtcd_location loc = rtcd_locate(&ray, v(tri[0]), v(tri[1]), v(tri[2]));
+    if (loc.inside && loc.t_num > 0.0f) best = std::min(best, loc.t_num / loc.det);
   }
   return best;
 }
@@ -48,8 +41,9 @@ ShapeScale measure_mesh(const Mesh& mesh, const RaySources& sources, double radi
   for (size_t k = 0; k < samples; ++k) {
     const uint32_t v = uint32_t(k * vertices / samples);
     if (sources.directions[v].isZero()) continue;
-    const double t = self_ray_length(mesh, v, sources.origins[v].cast<double>(),
-                                     sources.directions[v].cast<double>().normalized());
+    const Eigen::Vector3f d = sources.directions[v].normalized();
+    const rtcd_vec3 origin = rtcd_v3(sources.origins[v].x(), sources.origins[v].y(), sources.origins[v].z());
+    const double t = self_ray_length(mesh, v, rtcd_make_ray(origin, rtcd_v3(d.x(), d.y(), d.z())));
     if (std::isfinite(t)) lengths.push_back(t);
   }
   if (lengths.empty()) {

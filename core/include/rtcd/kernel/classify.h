@@ -23,12 +23,13 @@ RTCD_INLINE int rtcd_classify(int status, float t, int predictive, float distanc
 }
 
 /* A line status as a tracked ray's kind: rtcd_classify, except that a ray
- * that reports nothing stays watched (when `watch`: only walks use it) unless
- * its line leaves the target farther behind it than distanceExtension
- * (moving away). */
-RTCD_INLINE int rtcd_line_kind(int status, float t, int predictive, int watch, float distance_extension) {
+ * that reports nothing stays watched (when `watch`: only walks use it) while
+ * the vertex is `near` (within the watch reach of the target's box) or its
+ * line does not leave the target farther behind it than distanceExtension:
+ * a vertex is dropped only once it is both out of reach and moving away. */
+RTCD_INLINE int rtcd_line_kind(int status, float t, int predictive, int watch, int near, float distance_extension) {
   int kind = rtcd_classify(status, t, predictive, distance_extension);
-  if (kind == RTCD_RAY_DROPPED && watch && !(status == RTCD_LINE_BEHIND && -t > distance_extension))
+  if (kind == RTCD_RAY_DROPPED && watch && (near || !(status == RTCD_LINE_BEHIND && -t > distance_extension)))
     kind = RTCD_RAY_WATCHED;
   return kind;
 }
@@ -42,9 +43,10 @@ RTCD_INLINE int rtcd_line_kind(int status, float t, int predictive, int watch, f
  * or an entering crossing behind the origin found by the exit walk (the
  * vertex passed into the target there). */
 RTCD_INLINE int rtcd_walked_kind(int exit_status, float exit_t, int entry_status, float entry_t, int predictive,
-                                 int watch, float distance_extension) {
+                                 int watch, int near, float distance_extension) {
   if (exit_status == RTCD_LINE_FRONT && exit_t < 0.0f) return -1;
-  if (exit_status != RTCD_LINE_HIT) return rtcd_line_kind(exit_status, exit_t, predictive, watch, distance_extension);
+  if (exit_status != RTCD_LINE_HIT)
+    return rtcd_line_kind(exit_status, exit_t, predictive, watch, near, distance_extension);
   if (entry_status != RTCD_LINE_FRONT) return -1;
   if (entry_t <= 0.0f) return RTCD_RAY_PENETRATING;
   return watch ? RTCD_RAY_WATCHED : RTCD_RAY_DROPPED;
