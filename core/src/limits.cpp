@@ -72,7 +72,7 @@ PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeS
   const double thickness = std::min({a.thickness, b.thickness, 2.0 * size});
   PairLimits l;
   l.distance_extension = config.distance_extension.value_or(std::max(resting_extension(size), std::min(2.0 * motion, size)));
-  l.displacement_threshold = config.displacement_threshold.value_or(std::min(l.distance_extension, thickness / 4.0));
+  l.displacement_threshold = config.displacement_threshold.value_or(std::min(l.distance_extension / 2.0, thickness / 4.0));
   if (!config.distance_extension) l.distance_extension = std::max(l.distance_extension, l.displacement_threshold);
   if (config.max_walk_steps) {
     l.max_walk_steps = *config.max_walk_steps;

@@ -176,8 +176,12 @@ TEST(Sim, EffectsNotListedNeverRun) {
     EXPECT_NEAR(s.bodies()[0].pose.position.z(), 0.3, 1e-6) << "without gravity it stays put";
   }
   {
+    // The box starts 0.05 above the ground, its corner rays 0.087 from it:
+    // an extension of 0.1 tracks them from the first step (a derived one,
+    // a tenth of the box's radius, would first see them once they touch).
     Simulation s(scene_from(R"({"steps": 20, "effects": ["gravity", "contacts", "friction", "restitution",
-        "predictive", "speculative", "projected", "interpenetration"], "interpenetration": {"every": 5}, )" + bodies + "}"));
+        "predictive", "speculative", "projected", "interpenetration"], "interpenetration": {"every": 5},
+        "narrow_phase": {"distance_extension": 0.1, "displacement_threshold": 0.05}, )" + bodies + "}"));
     for (int i = 0; i < 20; ++i) s.step();
     const sim::StageCounters& c = s.counters();
     EXPECT_EQ(c.gravity, 20u);

@@ -42,7 +42,7 @@ TEST(Limits, ThinBodiesLowerTheThresholdAndSpeedRaisesTheExtension) {
   const Config derived;
   const auto resting = derive_limits(derived, thick, thin, 0.0);
   EXPECT_DOUBLE_EQ(resting.distance_extension, rtcd::resting_extension(std::min(thick.radius, thin.radius)));
-  EXPECT_DOUBLE_EQ(resting.displacement_threshold, thin.thickness / 4);
+  EXPECT_DOUBLE_EQ(resting.displacement_threshold, std::min(resting.distance_extension / 2, thin.thickness / 4));
   const auto fast = derive_limits(derived, thick, thin, 0.5);
   EXPECT_DOUBLE_EQ(fast.distance_extension, 1.0);
   // No farther than the smaller body's size, however fast.
@@ -72,10 +72,10 @@ TEST(Limits, AValueSetInTheConfigWinsAndTheThresholdStaysWithinTheExtension) {
   EXPECT_EQ(l.displacement_threshold, 5.0);
   EXPECT_EQ(l.distance_extension, 5.0);
   c = {};
-  c.distance_extension = 1e-3;  // below the derived threshold: the threshold follows it
+  c.distance_extension = 1e-3;  // the threshold follows it: half of it
   l = derive_limits(c, a, a, 0.0);
   EXPECT_EQ(l.distance_extension, 1e-3);
-  EXPECT_EQ(l.displacement_threshold, 1e-3);
+  EXPECT_EQ(l.displacement_threshold, 0.5e-3);
   c.max_walk_steps = 7;
   EXPECT_EQ(derive_limits(c, a, a, 10.0).max_walk_steps, 7u);
 }

@@ -31,7 +31,8 @@ struct Config {
 
   // Relative motion (equation 2.1, in length units) since a pair's last full
   // step above which the pair is traced in full again. Range [0,
-  // distance_extension]. Derived: a quarter of the thinner body's thickness.
+  // distance_extension]. Derived: half the extension, at most a quarter of
+  // the thinner body's thickness.
   // Cost: higher keeps pairs iterative longer (cheaper) but walks lose more
   // rays on concave regions.
   std::optional<double> displacement_threshold;
@@ -39,7 +40,7 @@ struct Config {
   // How far outside the other body a vertex is still tracked by a predictive
   // ray, and how much both bounding boxes grow before selecting candidate
   // vertices. Range [0, 1e30), and >= displacement_threshold. Derived: a
-  // fifth of the smaller body's radius, or twice the pair's last motion if
+  // tenth of the smaller body's radius, or twice the pair's last motion if
   // that is more (at most the radius). Cost: more candidate vertices and longer predictive rays.
   std::optional<double> distance_extension;
 

@@ -9,14 +9,17 @@
 //   motion m     equation 2.1 between the pair's relative poses at the last
 //                step and now (0 when either body was not in last step's pairs)
 //
-//   distance_extension     E = max(s / 5, min(2 m, s))   predictive rays see
+//   distance_extension     E = max(s / 10, min(2 m, s))  predictive rays see
 //                          a step ahead at twice the current speed, up to
 //                          the smaller body's size (a body moving farther
 //                          in a step is past any ray); resting pairs still
-//                          track a fifth of the smaller body
-//   displacement_threshold T = min(E, f / 4)      walks follow motions small
+//                          track a tenth of the smaller body
+//   displacement_threshold T = min(E / 2, f / 4)  walks follow motions small
 //                          against the thinnest part, where a concavity's gap
 //                          or a thin wall can be jumped
+//
+// For bodies of unit radius at rest these are the thesis' constants (0.1,
+// 0.05, 32); they scale with the bodies.
 //   max_walk_steps         W = max(32, ceil(4 max(2 m, T) / e))   a walk
 //                          crosses the distance it may have to cover four
 //                          times over, in triangles; at most the larger
@@ -72,6 +75,6 @@ inline bool derives_limits(const Config& config) {
 
 // The least extension the rules give a pair in which one shape has `radius`
 // (hosts growing broad-phase boxes by half of it find every pair within it).
-inline double resting_extension(double radius) { return radius / 5.0; }
+inline double resting_extension(double radius) { return radius / 10.0; }
 
 }  // namespace rtcd
