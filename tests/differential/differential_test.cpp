@@ -104,7 +104,7 @@ TEST_P(Differential, BoundsHold) {
 
 INSTANTIATE_TEST_SUITE_P(All, Differential, ::testing::ValuesIn(all_cases()),
                          [](const ::testing::TestParamInfo<Case>& info) {
-                           return info.param.family + "_" + info.param.backend + "_" + to_string(info.param.mode);
+                           return info.param.family + "_" + test::test_name(info.param.backend) + "_" + to_string(info.param.mode);
                          });
 
 }  // namespace
