@@ -39,6 +39,8 @@ namespace {
 static_assert(sizeof(rtcd_tracked) == sizeof(TrackedRay));
 static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 
+constexpr size_t kGroupSize = 64;
+
 std::atomic<OpenClFault> g_injected{OpenClFault::none};
 
 OpenClFault requested_fault() {
@@ -312,6 +314,7 @@ struct Device {
   std::vector<rtcd_outcome> host_outcomes;
   uint32_t items = 0, ray_count = 0;
   size_t load = 0;
+  size_t group_size = 1;
   cl::Event counts_read, outcomes_read;
 };
 
@@ -332,6 +335,9 @@ class OpenClExecutor final : public RayExecutor {
         device.count = cl::Kernel(runtime_->program, "rtcd_count");
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
+        device.group_size = kGroupSize;
+        for (const cl::Kernel* k : {&device.select, &device.count, &device.scatter, &device.trace})
+          if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
     } catch (const cl::Error& e) {
@@ -501,8 +507,12 @@ class OpenClExecutor final : public RayExecutor {
     d.ray_count = n;
   }
 
+  // A fixed work-group size, the global size rounded up to it (kernels
+  // ignore the excess): drivers such as PoCL compile a kernel again for
+  // every new work-group size they would pick themselves.
   static void launch(Device& d, cl::Kernel& k, size_t n) {
-    d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(n), cl::NullRange);
+    const size_t group = d.group_size;
+    d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + group - 1) / group * group), cl::NDRange(group));
   }
 
   void enqueue_trace(Device& d) {
