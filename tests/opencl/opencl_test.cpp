@@ -227,11 +227,18 @@ TEST_P(Faults, FinishOnTheCpuWithTheSameOutput) {
   const auto faulted = run_scene("opencl-basic", scene);
   const std::string err = ::testing::internal::GetCapturedStderr();
   inject_opencl_fault(OpenClFault::none);
-  EXPECT_NE(err.find("rtcd: opencl-basic: "), std::string::npos) << err;
+  // The driver may print its own diagnostics (PoCL's compiler does).
+  const size_t first = err.find("rtcd: opencl-basic: ");
+  EXPECT_NE(first, std::string::npos) << err;
+  EXPECT_EQ(err.find("rtcd: ", first + 1), std::string::npos) << "one message, on the first occurrence:\n" << err;
   EXPECT_NE(err.find(reason), std::string::npos) << err;
   EXPECT_NE(err.find("on the CPU (basic)"), std::string::npos) << err;
-  EXPECT_EQ(err.find("rtcd: ", 1), std::string::npos) << "one message, on the first occurrence:\n" << err;
   EXPECT_GT(expect_same_run(faulted, reference), 0u);
+}
+
+std::string fault_name(const ::testing::TestParamInfo<Faults::ParamType>& info) {
+  const char* names[] = {"none", "no_platform", "build", "out_of_memory", "mid_step"};
+  return names[int(std::get<0>(info.param))];
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -240,10 +247,7 @@ INSTANTIATE_TEST_SUITE_P(
                       std::make_tuple(OpenClFault::build, std::string("failed to build")),
                       std::make_tuple(OpenClFault::out_of_memory, std::string("CL_MEM_OBJECT_ALLOCATION_FAILURE")),
                       std::make_tuple(OpenClFault::mid_step, std::string("during a step"))),
-    [](const auto& info) {
-      const char* names[] = {"none", "no_platform", "build", "out_of_memory", "mid_step"};
-      return std::string(names[int(std::get<0>(info.param))]);
-    });
+    fault_name);
 
 // The BVH variant falls back to the fastest CPU tracer and still answers.
 TEST(OpenCl, BvhFaultFallsBackToEmbree) {
