@@ -16,6 +16,8 @@
 #include "opencl_backend.hpp"
 
 #include <CL/opencl.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <atomic>
@@ -530,84 +532,99 @@ class OpenClExecutor final : public RayExecutor {
     d.queue.flush();
   }
 
+  // Phase 1, on the device: candidates placed and flagged, counted per job;
+  // the counts come back.
+  void place_on_device(Device& d) {
+    const auto jobs_count = rtcd_uint(d.host_jobs.size());
+    write(d, d.jobs, d.host_jobs);
+    write(d, d.first_items, d.host_first_items);
+    write(d, d.frames, d.host_frames);
+    write(d, d.tracked, d.host_tracked);
+    reserve(d.flags, d.items);
+    reserve(d.staging, d.items * sizeof(rtcd_candidate));
+    reserve(d.slots, d.items * sizeof(rtcd_uint));
+    reserve(d.counts, jobs_count * sizeof(rtcd_uint));
+    cl::Kernel& s = d.select;
+    s.setArg(0, d.jobs.buffer);
+    s.setArg(1, d.first_items.buffer);
+    s.setArg(2, d.frames.buffer);
+    s.setArg(3, jobs_count);
+    s.setArg(4, rtcd_uint(d.items));
+    s.setArg(5, d.shapes[0]);
+    s.setArg(6, d.shapes[8]);
+    s.setArg(7, d.shapes[9]);
+    s.setArg(8, d.tracked.buffer);
+    s.setArg(9, d.flags.buffer);
+    s.setArg(10, d.staging.buffer);
+    launch(d, s, d.items);
+    cl::Kernel& c = d.count;
+    c.setArg(0, d.jobs.buffer);
+    c.setArg(1, jobs_count);
+    c.setArg(2, d.flags.buffer);
+    c.setArg(3, d.slots.buffer);
+    c.setArg(4, d.counts.buffer);
+    launch(d, c, jobs_count);
+    d.queue.enqueueReadBuffer(d.counts.buffer, CL_FALSE, 0, jobs_count * sizeof(rtcd_uint), d.host_counts.data(),
+                              nullptr, &d.counts_read);
+    d.queue.flush();
+  }
+
+  // One device's share of the batch, start to end. Each device is driven
+  // from its own host thread: some drivers (PoCL's `basic`) run a device's
+  // commands in the thread that flushes or waits on it.
+  void run_on(Device& d, bool inject_mid_step) {
+    d.host_counts.assign(d.host_jobs.size(), 0);
+    if (d.items == 0) {
+      d.ray_count = 0;
+      return;
+    }
+    upload_shapes(d);
+    if (!runtime_->place_on_device) {
+      place_on_host(d);
+    } else {
+      place_on_device(d);
+    }
+    if (inject_mid_step) throw cl::Error(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel (injected fault)");
+    // Phase 2: compaction and tracing; the outcomes come back.
+    if (runtime_->place_on_device) d.counts_read.wait();
+    first_rays(d);
+    if (d.ray_count == 0) return;
+    if (runtime_->place_on_device) {
+      const auto jobs_count = rtcd_uint(d.host_jobs.size());
+      write(d, d.first_rays, d.host_first_rays);
+      reserve(d.rays, d.ray_count * sizeof(rtcd_candidate));
+      cl::Kernel& k = d.scatter;
+      k.setArg(0, d.first_items.buffer);
+      k.setArg(1, d.first_rays.buffer);
+      k.setArg(2, jobs_count);
+      k.setArg(3, rtcd_uint(d.items));
+      k.setArg(4, d.flags.buffer);
+      k.setArg(5, d.slots.buffer);
+      k.setArg(6, d.staging.buffer);
+      k.setArg(7, d.rays.buffer);
+      launch(d, k, d.items);
+    } else {
+      write(d, d.jobs, d.host_jobs);
+      write(d, d.rays, d.host_rays);
+    }
+    enqueue_trace(d);
+    d.outcomes_read.wait();
+  }
+
   void run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes) {
     ++steps_;
     assign(jobs, config);
     const bool inject_mid_step = fault_ == OpenClFault::mid_step && steps_ == 2;
-    // Phase 1: candidates and their counts, every device at once.
-    for (Device& d : devices_) {
-      d.host_counts.assign(d.host_jobs.size(), 0);
-      if (d.items == 0) continue;
-      upload_shapes(d);
-      if (!runtime_->place_on_device) {
-        place_on_host(d);
-        continue;
-      }
-      const auto jobs_count = rtcd_uint(d.host_jobs.size());
-      write(d, d.jobs, d.host_jobs);
-      write(d, d.first_items, d.host_first_items);
-      write(d, d.frames, d.host_frames);
-      write(d, d.tracked, d.host_tracked);
-      reserve(d.flags, d.items);
-      reserve(d.staging, d.items * sizeof(rtcd_candidate));
-      reserve(d.slots, d.items * sizeof(rtcd_uint));
-      reserve(d.counts, jobs_count * sizeof(rtcd_uint));
-      cl::Kernel& s = d.select;
-      s.setArg(0, d.jobs.buffer);
-      s.setArg(1, d.first_items.buffer);
-      s.setArg(2, d.frames.buffer);
-      s.setArg(3, jobs_count);
-      s.setArg(4, rtcd_uint(d.items));
-      s.setArg(5, d.shapes[0]);
-      s.setArg(6, d.shapes[8]);
-      s.setArg(7, d.shapes[9]);
-      s.setArg(8, d.tracked.buffer);
-      s.setArg(9, d.flags.buffer);
-      s.setArg(10, d.staging.buffer);
-      launch(d, s, d.items);
-      cl::Kernel& c = d.count;
-      c.setArg(0, d.jobs.buffer);
-      c.setArg(1, jobs_count);
-      c.setArg(2, d.flags.buffer);
-      c.setArg(3, d.slots.buffer);
-      c.setArg(4, d.counts.buffer);
-      launch(d, c, jobs_count);
-      d.queue.enqueueReadBuffer(d.counts.buffer, CL_FALSE, 0, jobs_count * sizeof(rtcd_uint), d.host_counts.data(),
-                                nullptr, &d.counts_read);
-      d.queue.flush();
+    if (devices_.size() == 1) {
+      run_on(devices_[0], inject_mid_step);
+    } else {
+      tbb::parallel_for(
+          tbb::blocked_range<size_t>(0, devices_.size(), 1),
+          [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) run_on(devices_[i], inject_mid_step);
+          },
+          tbb::simple_partitioner());
     }
-    if (inject_mid_step) throw cl::Error(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel (injected fault)");
-    // Phase 2: compaction and tracing, every device at once.
-    for (Device& d : devices_) {
-      if (d.items == 0) {
-        d.ray_count = 0;
-        continue;
-      }
-      if (runtime_->place_on_device) d.counts_read.wait();
-      first_rays(d);
-      if (d.ray_count == 0) continue;
-      if (runtime_->place_on_device) {
-        const auto jobs_count = rtcd_uint(d.host_jobs.size());
-        write(d, d.first_rays, d.host_first_rays);
-        reserve(d.rays, d.ray_count * sizeof(rtcd_candidate));
-        cl::Kernel& k = d.scatter;
-        k.setArg(0, d.first_items.buffer);
-        k.setArg(1, d.first_rays.buffer);
-        k.setArg(2, jobs_count);
-        k.setArg(3, rtcd_uint(d.items));
-        k.setArg(4, d.flags.buffer);
-        k.setArg(5, d.slots.buffer);
-        k.setArg(6, d.staging.buffer);
-        k.setArg(7, d.rays.buffer);
-        launch(d, k, d.items);
-      } else {
-        write(d, d.jobs, d.host_jobs);
-        write(d, d.rays, d.host_rays);
-      }
-      enqueue_trace(d);
-    }
-    for (Device& d : devices_)
-      if (d.ray_count > 0) d.outcomes_read.wait();
     // Each job's outcomes into its own slot: the step keeps job order.
     for (Device& d : devices_) {
       for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
