@@ -612,9 +612,13 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   void run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes) {
-    ++steps_;
     assign(jobs, config);
-    const bool inject_mid_step = fault_ == OpenClFault::mid_step && steps_ == 2;
+    // The injected mid-step fault strikes the second batch with work, after
+    // its first kernels were enqueued.
+    bool work = false;
+    for (const Device& d : devices_) work = work || d.items > 0;
+    batches_ += work;
+    const bool inject_mid_step = fault_ == OpenClFault::mid_step && batches_ == 2;
     if (devices_.size() == 1) {
       run_on(devices_[0], inject_mid_step);
     } else {
@@ -646,7 +650,7 @@ class OpenClExecutor final : public RayExecutor {
   ShapeData data_;
   std::vector<Device> devices_;
   std::unique_ptr<RayExecutor> cpu_;
-  uint64_t steps_ = 0;
+  uint64_t batches_ = 0;  // batches with rays
 };
 
 }  // namespace
