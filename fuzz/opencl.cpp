@@ -67,7 +67,10 @@ void require_same(const StepResult& x, const StepResult& y, const std::string& w
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
   const auto input = fuzz::read_pair_case(data, length);
   if (!input) return 0;
-  const auto& [shape_a, shape_b, poses_a, poses_b, config, steps] = *input;
+  const std::shared_ptr<const Shape>&shape_a = input->shape_a, &shape_b = input->shape_b;
+  const std::vector<Pose>&poses_a = input->poses_a, &poses_b = input->poses_b;
+  const Config& config = input->config;
+  const int steps = input->steps;
   if (const char* dir = std::getenv("RTCD_FUZZ_DUMP")) fuzz::dump(dir, *shape_a, *shape_b, poses_a, poses_b, config);
 
   const std::vector<std::string> backends = {"opencl-basic", "basic"};
