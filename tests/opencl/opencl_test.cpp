@@ -214,7 +214,7 @@ TEST(Bvh, AnswersAsTheBruteForce) {
                 rtcd_brute_nearest(origin, radius, positions, triangles, zero_area, n))
           << "point " << i;
     }
-    EXPECT_GT(hits, 1000u);
+    EXPECT_GT(hits, 500u) << "too few hits: the comparison would be vacuous";
   }
 }
 
