@@ -45,7 +45,8 @@ static_assert(sizeof(Mesh::Triangle) == 3 * sizeof(rtcd_uint) && sizeof(Mesh::Ne
 
 rtcd_vec3 to_kernel(const Eigen::Vector3f& v) { return rtcd_v3(v.x(), v.y(), v.z()); }
 
-// The float bounds that hold exactly the floats inside [lo, hi] (double).
+// The least float >= x and the greatest float <= x: a float lies in a
+// double interval exactly when it lies between these bounds of its ends.
 float float_at_least(double x) {
   const float f = float(x);
   return double(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
