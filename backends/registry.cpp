@@ -7,6 +7,9 @@
 #ifdef RTCD_WITH_EMBREE
 #include "embree/embree_backend.hpp"
 #endif
+#ifdef RTCD_WITH_OPENCL
+#include "opencl/opencl_backend.hpp"
+#endif
 
 namespace rtcd {
 
@@ -20,8 +23,26 @@ std::vector<BackendInfo> available_backends() {
     list.push_back({"embree", false, e.what()});
   }
 #endif
+#ifdef RTCD_WITH_OPENCL
+  for (BackendInfo& info : opencl_backend_infos()) list.push_back(std::move(info));
+#endif
   return list;
 }
+
+#ifdef RTCD_WITH_OPENCL
+namespace {
+// The CPU executor that finishes an OpenCL backend's steps after a fault:
+// the same tracer as the devices' (brute force), or the fastest BVH here.
+CpuFallback opencl_fallback(const std::string& name) {
+  if (name.rfind("opencl-basic", 0) == 0) return {"basic", make_basic_tracers};
+#ifdef RTCD_WITH_EMBREE
+  return {"embree", make_embree_tracers};
+#else
+  return {"basic", make_basic_tracers};
+#endif
+}
+}  // namespace
+#endif
 
 std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Config& config) {
   config.validate();
@@ -32,8 +53,13 @@ std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Co
     return false;
   };
   std::string chosen = name;
-  if (name == "auto") chosen = usable("embree") ? "embree" : "basic";  // fastest first
+  // A fixed order, fastest first, so a run stays reproducible.
+  if (name == "auto") chosen = usable("embree") ? "embree" : usable("opencl") ? "opencl" : "basic";
   if (chosen == "basic") return make_basic_narrow_phase(config);
+#ifdef RTCD_WITH_OPENCL
+  // Built even without a usable device: it says why and runs on the CPU.
+  if (is_opencl_name(chosen)) return make_opencl_narrow_phase(chosen, config, opencl_fallback(chosen));
+#endif
 #ifdef RTCD_WITH_EMBREE
   if (chosen == "embree" && usable("embree")) return make_embree_narrow_phase(config);
 #endif

@@ -1,8 +1,12 @@
 // Rays per second of full tracing (basic, Embree) and of the iterative walk,
 // on 902-triangle concave meshes in resting contact: one pair, and a batch.
+// The OpenCL cases (where a device is usable) run the same on one device
+// and on every device of the platform: /pairs/devices.
 //   rtcd_bench [--benchmark_filter=...]
+//   POCL_DEVICES="basic basic" rtcd_bench --benchmark_filter=opencl   # two single-threaded devices
 #include <cstdio>
 #include <thread>
+#include <tuple>
 
 #include <benchmark/benchmark.h>
 
@@ -94,9 +98,31 @@ BENCHMARK(full_basic)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(full_embree)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(iterative)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 
+// An OpenCL variant on state.range(1) devices: the first one, or all.
+void opencl(benchmark::State& state, const std::string& variant, Mode mode) {
+  run(state, state.range(1) == 1 ? variant + ":devices=0" : variant, mode);
+}
+
+bool opencl_usable() {
+  for (const auto& b : available_backends())
+    if (b.name == "opencl" && b.usable) return true;
+  return false;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (opencl_usable()) {
+    for (const auto& [name, variant, mode] : {std::tuple{"opencl_full_basic", "opencl-basic", Mode::full},
+                                              std::tuple{"opencl_full_bvh", "opencl", Mode::full},
+                                              std::tuple{"opencl_iterative", "opencl", Mode::iterative}})
+      benchmark::RegisterBenchmark(name, opencl, std::string(variant), mode)
+          ->Args({1, 1})
+          ->Args({64, 1})
+          ->Args({64, 2})
+          ->UseRealTime()  // the host thread mostly waits on the devices
+          ->Unit(benchmark::kMicrosecond);
+  }
   std::printf("rtcd_bench: backends");
   for (const auto& b : available_backends()) std::printf(" %s [%s]", b.name.c_str(), b.detail.c_str());
   std::printf("; hardware threads %u\n", std::thread::hardware_concurrency());

@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
   query->add_option("--pose-a", q.pose_a, "Pose of A: \"tx ty tz qw qx qy qz\" (default identity)");
   query->add_option("--pose-b", q.pose_b, "Pose of B: \"tx ty tz qw qx qy qz\" (default identity)");
   query->add_option("--sequence", q.sequence, "JSON array of {\"pose_a\": [7], \"pose_b\": [7]} steps");
-  query->add_option("--backend", q.backend, "basic, embree or auto");
+  query->add_option("--backend", q.backend, "basic, embree, opencl, opencl-basic (then :gpu, :cpu, :devices=0,1) or auto");
   query->add_option("--mode", q.mode, "full, iterative or auto");
   rtcd::cli::add_knobs(*query, q.knobs);
   query->add_option("--sampling", q.sampling, "Extra ray origins per unit area on sphere and box sources");
@@ -122,7 +122,7 @@ int main(int argc, char** argv) {
   bool sweep = false;
   auto* validate = app.add_subcommand(
       "validate", "Judge a backend on random pairs against the exact reference, FCL, GIMPACT and libccd");
-  validate->add_option("--backend", v.backend, "basic, embree or auto (default: every usable backend)");
+  validate->add_option("--backend", v.backend, "basic, embree, opencl[-basic][:...] or auto (default: every usable backend)");
   validate->add_option("--family", v.family, "convex, concave, torus, plates, highres or primitives (default: all)");
   validate->add_option("--pairs", v.pairs, "Random pairs per family")->check(CLI::Range(size_t(1), size_t(10'000'000)));
   validate->add_option("--seed", v.seed, "Seed of the random poses");

@@ -22,6 +22,16 @@ namespace rtcd::fuzz {
   std::abort();
 }
 
+// The usable CPU backends (basic, and embree where built): the harnesses
+// pin these, so no input pays for an OpenCL context (fuzz/opencl.cpp keeps
+// one for its whole run).
+inline std::vector<std::string> cpu_backends() {
+  std::vector<std::string> names;
+  for (const auto& b : available_backends())
+    if (b.usable && (b.name == "basic" || b.name == "embree")) names.push_back(b.name);
+  return names;
+}
+
 inline std::string num(double v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.9g", v);

@@ -31,7 +31,7 @@ const bool verbose = std::getenv("RTCD_FUZZ_VERBOSE") != nullptr;
 struct Rig {
   std::shared_ptr<const Shape> shape_a = std::make_shared<Shape>(gen::concave_blob(902, 1));
   std::shared_ptr<const Shape> shape_b = std::make_shared<Shape>(gen::concave_blob(902, 2));
-  std::unique_ptr<NarrowPhase> narrow = make_narrow_phase("auto");
+  std::unique_ptr<NarrowPhase> narrow = make_narrow_phase(fuzz::cpu_backends().back());
   BodyPair pair;
   Rig() {
     pair.a = narrow->add_body(narrow->add_shape(shape_a), Pose{});

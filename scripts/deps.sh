@@ -8,6 +8,7 @@ packages=(
   libcli11-dev nlohmann-json3-dev
   libgtest-dev libbenchmark-dev
   libfcl-dev libccd-dev libbullet-dev libstb-dev python3-matplotlib
+  pocl-opencl-icd opencl-clhpp-headers opencl-c-headers ocl-icd-opencl-dev clinfo
 )
 missing=()
 for p in "${packages[@]}"; do

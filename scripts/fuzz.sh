@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 
 seconds=${FUZZ_SECONDS:-60}
 timeout=${FUZZ_TIMEOUT:-30}  # seconds one input may take before it counts as a hang
-all=(mesh_pair mesh_file pose_sequence scene recording)
+all=(mesh_pair mesh_file pose_sequence scene recording opencl)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
 
 cmake --preset fuzz >/dev/null || exit 1
@@ -21,8 +21,11 @@ cmake --build --preset fuzz --target "${targets[@]}" || exit 1  # the harnesses 
 
 # UBSan only reports by default: halt, so libFuzzer saves the input.
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1}
-# A leak inside assimp's PLY reader is not ours (fuzz/lsan.supp says which).
+# A leak inside assimp's PLY reader, and what the OpenCL ICD loader and PoCL
+# keep until exit, are not ours (fuzz/lsan.supp says which).
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp}
+# The opencl harness runs on PoCL's CPU devices, two of them as in CI.
+export POCL_DEVICES=${POCL_DEVICES:-"pthread pthread"}
 
 scratch=$(mktemp -d "${TMPDIR:-/tmp}/rtcd_fuzz.XXXXXX")
 trap 'rm -rf "$scratch"' EXIT
@@ -51,7 +54,10 @@ for h in "${harnesses[@]}"; do
   runs="-"
   if [ "$seconds" -gt 0 ] && [ "$result" = ok ]; then
     echo "== $h: fuzzing ${seconds} s"
-    cp -r "fuzz/corpus/$h" "$scratch/$h"
+    # The opencl harness reads mesh_pair's input: it starts from its seeds.
+    seeds=fuzz/corpus/$h
+    [ "$h" = opencl ] && seeds=fuzz/corpus/mesh_pair
+    cp -r "$seeds" "$scratch/$h"
     dict=()
     [ -f "fuzz/$h.dict" ] && dict=(-dict="fuzz/$h.dict")
     # FUZZ_ARGS: extra libFuzzer flags, e.g. FUZZ_ARGS="-seed=1 -max_len=512".

@@ -1,6 +1,7 @@
 // Helpers shared by the test suites.
 #pragma once
 
+#include <cctype>
 #include <memory>
 #include <set>
 #include <tuple>
@@ -60,6 +61,13 @@ inline std::vector<std::string> usable_backends() {
   for (const auto& b : available_backends())
     if (b.usable) names.push_back(b.name);
   return names;
+}
+
+// A backend name as a test name: gtest takes letters, digits and '_' only.
+inline std::string test_name(std::string backend) {
+  for (char& c : backend)
+    if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+  return backend;
 }
 
 }  // namespace rtcd::test

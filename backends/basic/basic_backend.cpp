@@ -3,8 +3,7 @@
 // the reference the other backends are held to.
 #include "basic_backend.hpp"
 
-#include "rtcd/kernel/nearest.h"
-#include "rtcd/kernel/walk.h"
+#include "rtcd/kernel/brute.h"
 
 namespace rtcd {
 namespace {
@@ -14,48 +13,20 @@ class BasicTracer final : public MeshTracer {
   explicit BasicTracer(const Mesh& mesh) : mesh_(mesh) {}
 
   TraceHit first_hit(const rtcd_ray& ray, float t_max) const override {
-    TraceHit best;
-    best.t = t_max;
-    const auto positions = mesh_.positions();
-    const auto triangles = mesh_.triangles();
-    const auto zero_area = mesh_.zero_area();
-    for (size_t i = 0; i < triangles.size(); ++i) {
-      if (zero_area[i]) continue;
-      const auto& tri = triangles[i];
-      const rtcd_location loc = rtcd_locate(&ray, rtcd_v3(positions[tri[0]].x(), positions[tri[0]].y(), positions[tri[0]].z()),
-                                            rtcd_v3(positions[tri[1]].x(), positions[tri[1]].y(), positions[tri[1]].z()),
-                                            rtcd_v3(positions[tri[2]].x(), positions[tri[2]].y(), positions[tri[2]].z()));
-      if (!loc.inside || loc.t_num < 0.0f) continue;
-      const float t = loc.t_num / loc.det;
-      if (t <= best.t) {
-        if (t == best.t && best.triangle >= 0) continue;  // ties: lowest index wins
-        best.t = t;
-        best.triangle = int32_t(i);
-      }
-    }
-    return best;
+    const rtcd_hit h = rtcd_brute_first_hit(&ray, positions(), triangles(), mesh_.zero_area().data(),
+                                            rtcd_uint(mesh_.triangle_count()), t_max);
+    return {h.triangle, h.t};
   }
 
   int32_t nearest(const rtcd_vec3& point, float radius) const override {
-    const auto positions = mesh_.positions();
-    const auto triangles = mesh_.triangles();
-    const auto zero_area = mesh_.zero_area();
-    auto v = [&](uint32_t i) { return rtcd_v3(positions[i].x(), positions[i].y(), positions[i].z()); };
-    int32_t best = -1;
-    float best_d2 = radius * radius;
-    for (size_t i = 0; i < triangles.size(); ++i) {
-      if (zero_area[i]) continue;
-      const auto& tri = triangles[i];
-      const float d2 = rtcd_point_triangle_distance2(point, v(tri[0]), v(tri[1]), v(tri[2]));
-      if (d2 <= best_d2 && (best < 0 || d2 < best_d2)) {
-        best_d2 = d2;
-        best = int32_t(i);
-      }
-    }
-    return best;
+    return rtcd_brute_nearest(point, radius, positions(), triangles(), mesh_.zero_area().data(),
+                              rtcd_uint(mesh_.triangle_count()));
   }
 
  private:
+  const rtcd_vec3* positions() const { return reinterpret_cast<const rtcd_vec3*>(mesh_.positions().data()); }
+  const rtcd_uint* triangles() const { return reinterpret_cast<const rtcd_uint*>(mesh_.triangles().data()); }
+
   const Mesh& mesh_;  // owned by the registered Shape, which outlives the tracer
 };
 
@@ -67,8 +38,9 @@ class BasicTracerFactory final : public MeshTracerFactory {
 }  // namespace
 
 std::unique_ptr<NarrowPhase> make_basic_narrow_phase(const Config& config) {
-  return make_pipeline_narrow_phase("basic", {"cpu (TBB)"}, make_cpu_executor(std::make_unique<BasicTracerFactory>()),
-                                    config);
+  return make_pipeline_narrow_phase("basic", {"cpu (TBB)"}, make_cpu_executor(make_basic_tracers()), config);
 }
+
+std::unique_ptr<MeshTracerFactory> make_basic_tracers() { return std::make_unique<BasicTracerFactory>(); }
 
 }  // namespace rtcd

@@ -5,4 +5,6 @@
 
 namespace rtcd {
 std::unique_ptr<NarrowPhase> make_basic_narrow_phase(const Config& config);
+// Its tracer, for executors that finish steps on the CPU.
+std::unique_ptr<MeshTracerFactory> make_basic_tracers();
 }

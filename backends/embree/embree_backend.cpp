@@ -141,8 +141,10 @@ class EmbreeTracerFactory final : public MeshTracerFactory {
 
 std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const Config& config) {
   return make_pipeline_narrow_phase("embree", {embree_description()},
-                                    make_cpu_executor(std::make_unique<EmbreeTracerFactory>()), config);
+                                    make_cpu_executor(make_embree_tracers()), config);
 }
+
+std::unique_ptr<MeshTracerFactory> make_embree_tracers() { return std::make_unique<EmbreeTracerFactory>(); }
 
 std::string embree_description() {
   DeviceHandle d;

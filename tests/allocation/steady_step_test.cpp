@@ -91,7 +91,7 @@ TEST_P(SteadyStep, AllocatesNothing) {
 
 std::string name(const ::testing::TestParamInfo<SteadyStep::ParamType>& info) {
   const auto& [backend, mode, count] = info.param;
-  return backend + "_" + (mode == Mode::automatic ? std::string("auto") : to_string(mode)) + "_" +
+  return test::test_name(backend) + "_" + (mode == Mode::automatic ? std::string("auto") : to_string(mode)) + "_" +
          std::to_string(count);
 }
 

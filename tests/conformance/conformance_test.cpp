@@ -346,7 +346,7 @@ TEST_P(Conformance, SameContactsBitForBitAcrossThreadCounts) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(usable_backends()),
-                         [](const auto& info) { return info.param; });
+                         [](const auto& info) { return test_name(info.param); });
 
 TEST(Registry, UnknownBackendListsWhatIsAvailable) {
   try {

@@ -1,12 +1,36 @@
 /* Compiles the shared kernel headers as OpenCL C 1.2 and calls each entry
- * point, so the C/OpenCL-C subset stays honest. */
+ * point, so the C/OpenCL-C subset stays honest. The OpenCL backend's own
+ * kernels (backends/opencl/kernels.cl) are compiled by a test of their own. */
+#include "rtcd/kernel/bvh.h"
 #include "rtcd/kernel/classify.h"
 #include "rtcd/kernel/nearest.h"
 #include "rtcd/kernel/volumes.h"
 #include "rtcd/kernel/walk.h"
 
+/* The smallest tracer trace.h accepts: brute force over one mesh. */
+typedef struct {
+  __global const rtcd_vec3* positions;
+  __global const rtcd_uint* triangles;
+  __global const rtcd_int* neighbors;
+  __global const rtcd_uchar* zero_area;
+} rtcd_tracer;
+rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
+  return rtcd_brute_first_hit(ray, t->positions, t->triangles, t->zero_area, 1u, t_max);
+}
+rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius) {
+  return rtcd_brute_nearest(point, radius, t->positions, t->triangles, t->zero_area, 1u);
+}
+rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_ray* ray, rtcd_int start, rtcd_uint max_steps) {
+  return rtcd_walk(ray, t->positions, t->triangles, t->neighbors, t->zero_area, start, max_steps);
+}
+int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 direction) {
+  return rtcd_dot(direction, t->positions[triangle]) > 0.0f;
+}
+#include "rtcd/kernel/trace.h"
+
 __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                        __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
+                       __global const rtcd_bvh_node* nodes, __global const rtcd_uint* primitives,
                        __global float* out) {
   rtcd_ray ray = rtcd_make_ray(rtcd_v3(0.0f, 0.0f, 0.0f), rtcd_v3(0.0f, 0.0f, 1.0f));
   rtcd_walk_result w = rtcd_walk(&ray, positions, triangles, neighbors, zero_area, 0, 16u);
@@ -15,5 +39,38 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   float d2 = rtcd_point_triangle_distance2(ray.origin, positions[0], positions[1], positions[2]);
   int kind = rtcd_classify(w.status, w.t, 1, 0.1f) + rtcd_line_kind(w.status, w.t, 1, 1, 0, 0.1f) +
              rtcd_walked_kind(w.status, w.t, s.status, s.t, 1, 1, 0, 0.1f);
-  out[get_global_id(0)] = w.t + s.t + b.t + d2 + (float)kind;
+  rtcd_hit h = rtcd_bvh_first_hit(&ray, nodes, 1u, primitives, positions, triangles, zero_area, 1.0f);
+  rtcd_int near = rtcd_bvh_nearest(ray.origin, 1.0f, nodes, 1u, primitives, positions, triangles, zero_area);
+  rtcd_tracer t;
+  rtcd_trace_params p;
+  rtcd_candidate c;
+  rtcd_outcome o;
+  t.positions = positions;
+  t.triangles = triangles;
+  t.neighbors = neighbors;
+  t.zero_area = zero_area;
+  p.watch_lo = p.watch_hi = ray.origin;
+  p.extension = p.reach = 0.1f;
+  p.max_walk_steps = 8u;
+  p.predictive = p.watch = 1;
+  p.iterative = 0;
+  c.vertex = 0u;
+  c.start = c.entry = 0;
+  c.job = 0u;
+  c.origin = ray.origin;
+  c.direction = ray.direction;
+  rtcd_outcome_init(&o, 0u);
+  rtcd_full_trace(&t, &p, &c, 1, &o);
+  rtcd_walk_trace(&t, &p, &c, &o);
+  rtcd_volume_trace(RTCD_TARGET_BOX, 1.0f, ray.origin, &p, &c, &o);
+#ifdef RTCD_HAS_DOUBLE
+  {
+    rtcd_frame f;
+    int k;
+    for (k = 0; k < 9; ++k) f.rotation[k] = k % 4 == 0 ? 1.0 : 0.0;
+    for (k = 0; k < 3; ++k) f.translation[k] = f.lo[k] = f.hi[k] = 0.0;
+    kind += rtcd_place_ray(&f, ray.origin, ray.direction, &c.origin, &c.direction);
+  }
+#endif
+  out[get_global_id(0)] = w.t + s.t + b.t + d2 + (float)kind + h.t + (float)near + o.t;
 }

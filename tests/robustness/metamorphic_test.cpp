@@ -142,7 +142,7 @@ TEST_P(Metamorphic, RenumberingPermutesIdsOnly) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Metamorphic, ::testing::ValuesIn(usable_backends()),
-                         [](const auto& info) { return info.param; });
+                         [](const auto& info) { return test_name(info.param); });
 
 }  // namespace
 }  // namespace rtcd::test

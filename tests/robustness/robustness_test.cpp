@@ -376,7 +376,7 @@ TEST_P(Robustness, DeterministicAcrossRunsAndThreadCounts) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Robustness, ::testing::ValuesIn(usable_backends()),
-                         [](const auto& info) { return info.param; });
+                         [](const auto& info) { return test_name(info.param); });
 
 }  // namespace
 }  // namespace rtcd::test

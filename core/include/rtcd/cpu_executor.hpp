@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "rtcd/kernel/locate.h"
+#include "rtcd/kernel/tracer.h"
 #include "rtcd/step_pipeline.hpp"
 
 namespace rtcd {
@@ -36,5 +37,12 @@ class MeshTracerFactory {
 };
 
 std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory> tracers);
+
+// What every executor derives from a job the same way, for the per-ray code
+// of kernel/trace.h: the per-ray parameters, the transform and candidate box
+// for rtcd_place_ray, and the outcome as the pipeline reads it.
+rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, const Config& config);
+rtcd_frame make_frame(const RayJob& job);
+RayOutcome to_ray_outcome(const rtcd_outcome& o);
 
 }  // namespace rtcd

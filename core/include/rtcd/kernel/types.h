@@ -16,6 +16,12 @@
 typedef uint rtcd_uint;
 typedef int rtcd_int;
 typedef uchar rtcd_uchar;
+/* Double precision where the device has it (the ray origins' placement);
+ * the host places rays for a device without it. */
+#if defined(cl_khr_fp64) && !defined(RTCD_NO_FP64)
+#pragma OPENCL EXTENSION cl_khr_fp64 : enable
+#define RTCD_HAS_DOUBLE 1
+#endif
 #else
 #include <math.h>
 #include <stdint.h>
@@ -26,6 +32,7 @@ typedef uchar rtcd_uchar;
 typedef uint32_t rtcd_uint;
 typedef int32_t rtcd_int;
 typedef uint8_t rtcd_uchar;
+#define RTCD_HAS_DOUBLE 1
 #endif
 
 /* Three packed floats: 12 bytes, the layout of the host's position arrays. */

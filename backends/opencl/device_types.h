@@ -1,0 +1,44 @@
+/* The buffers the OpenCL host code and kernels.cl share, in the C subset
+ * that is also OpenCL C 1.2 (one definition for both sides). */
+#ifndef RTCD_OPENCL_DEVICE_TYPES_H
+#define RTCD_OPENCL_DEVICE_TYPES_H
+
+#include "rtcd/kernel/bvh.h"
+#include "rtcd/kernel/tracer.h"
+
+/* A registered shape: where its data lies in the concatenated buffers. */
+typedef struct {
+  rtcd_int kind; /* RTCD_TARGET_* of trace.h */
+  rtcd_uint first_vertex;
+  rtcd_uint first_triangle; /* triangles, neighbours, zero-area flags and normals */
+  rtcd_uint triangle_count;
+  rtcd_uint first_node; /* BVH nodes */
+  rtcd_uint node_count;
+  rtcd_uint first_primitive; /* the BVH's triangle list */
+  rtcd_uint first_source;    /* ray origins and directions */
+  rtcd_uint source_count;
+  float radius;             /* sphere */
+  rtcd_vec3 half_extents;   /* box */
+} rtcd_device_shape;
+
+/* One pair-direction of a batch on one device. Items are the job's
+ * possible rays (every source vertex, or every tracked ray), numbered
+ * across the batch; rays are the candidates among them, compacted. */
+typedef struct {
+  rtcd_trace_params params;
+  rtcd_uint source;
+  rtcd_uint target;
+  rtcd_uint first_item;
+  rtcd_uint item_count;
+  rtcd_uint first_tracked; /* iterative jobs: the job's tracked rays */
+  rtcd_uint padding;
+} rtcd_device_job;
+
+/* rtcd::TrackedRay. */
+typedef struct {
+  rtcd_uint vertex;
+  rtcd_int triangle;
+  rtcd_int entry;
+} rtcd_tracked;
+
+#endif

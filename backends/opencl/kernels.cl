@@ -1,0 +1,163 @@
+/* The OpenCL executor's kernels. The per-ray work is the shared code of
+ * core/include/rtcd/kernel (trace.h), run against this file's tracer: the
+ * brute-force traversal, or the stackless BVH with -DRTCD_BVH. The build
+ * inlines every #include (rtcd_embed_kernel), so the binary carries the
+ * whole source. */
+#include "device_types.h"
+#include "rtcd/kernel/bvh.h"
+#include "rtcd/kernel/walk.h"
+
+#ifdef RTCD_INJECTED_BUILD_FAILURE
+#error "build failure injected for a test (RTCD_OPENCL_FAULT=build)"
+#endif
+
+typedef struct {
+  __global const rtcd_vec3* positions;
+  __global const rtcd_uint* triangles;
+  __global const rtcd_int* neighbors;
+  __global const rtcd_uchar* zero_area;
+  __global const rtcd_vec3* normals;
+  __global const rtcd_bvh_node* nodes;
+  __global const rtcd_uint* primitives;
+  rtcd_uint triangle_count;
+  rtcd_uint node_count;
+} rtcd_tracer;
+
+RTCD_INLINE rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
+#ifdef RTCD_BVH
+  return rtcd_bvh_first_hit(ray, t->nodes, t->node_count, t->primitives, t->positions, t->triangles, t->zero_area,
+                            t_max);
+#else
+  return rtcd_brute_first_hit(ray, t->positions, t->triangles, t->zero_area, t->triangle_count, t_max);
+#endif
+}
+
+RTCD_INLINE rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius) {
+#ifdef RTCD_BVH
+  return rtcd_bvh_nearest(point, radius, t->nodes, t->node_count, t->primitives, t->positions, t->triangles,
+                          t->zero_area);
+#else
+  return rtcd_brute_nearest(point, radius, t->positions, t->triangles, t->zero_area, t->triangle_count);
+#endif
+}
+
+RTCD_INLINE rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_ray* ray, rtcd_int start,
+                                              rtcd_uint max_steps) {
+  return rtcd_walk(ray, t->positions, t->triangles, t->neighbors, t->zero_area, start, max_steps);
+}
+
+RTCD_INLINE int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 direction) {
+  return rtcd_dot(direction, t->normals[triangle]) > 0.0f;
+}
+
+#include "rtcd/kernel/trace.h"
+
+/* The job holding item (or ray) i: the last job whose first index is <= i. */
+RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint job_count, rtcd_uint i) {
+  rtcd_uint lo = 0, hi = job_count;
+  while (hi - lo > 1) {
+    rtcd_uint mid = (lo + hi) / 2;
+    if (firsts[mid] <= i) lo = mid;
+    else hi = mid;
+  }
+  return lo;
+}
+
+#ifdef RTCD_HAS_DOUBLE
+/* One item: the possible ray placed in the target's frame (rtcd_place_ray,
+ * in double) and flagged when it is a candidate. */
+__kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const rtcd_uint* first_items,
+                          __global const rtcd_frame* frames, rtcd_uint job_count, rtcd_uint item_count,
+                          __global const rtcd_device_shape* shapes, __global const rtcd_vec3* origins,
+                          __global const rtcd_vec3* directions, __global const rtcd_tracked* tracked,
+                          __global rtcd_uchar* flags, __global rtcd_candidate* staging) {
+  rtcd_uint i = get_global_id(0);
+  rtcd_uint j, k, s;
+  rtcd_device_job job;
+  rtcd_frame frame;
+  rtcd_candidate c;
+  if (i >= item_count) return;
+  j = rtcd_job_of(first_items, job_count, i);
+  job = jobs[j];
+  k = i - job.first_item;
+  c.job = j;
+  if (job.params.iterative) {
+    rtcd_tracked r = tracked[job.first_tracked + k];
+    c.vertex = r.vertex;
+    c.start = r.triangle;
+    c.entry = r.entry;
+  } else {
+    c.vertex = k;
+    c.start = -1;
+    c.entry = -1;
+  }
+  s = shapes[job.source].first_source + c.vertex;
+  frame = frames[j];
+  c.origin = rtcd_v3(0.0f, 0.0f, 0.0f);
+  c.direction = c.origin;
+  flags[i] = (rtcd_uchar)rtcd_place_ray(&frame, origins[s], directions[s], &c.origin, &c.direction);
+  staging[i] = c;
+}
+#endif
+
+/* One job: its candidates' places in its compacted list (a prefix sum over
+ * its items' flags, in item order, so rays keep the CPU's order). */
+__kernel void rtcd_count(__global const rtcd_device_job* jobs, rtcd_uint job_count, __global const rtcd_uchar* flags,
+                         __global rtcd_uint* slots, __global rtcd_uint* counts) {
+  rtcd_uint j = get_global_id(0);
+  rtcd_uint n = 0, k;
+  rtcd_device_job job;
+  if (j >= job_count) return;
+  job = jobs[j];
+  for (k = 0; k < job.item_count; ++k) {
+    slots[job.first_item + k] = n;
+    n += flags[job.first_item + k];
+  }
+  counts[j] = n;
+}
+
+/* One item: a candidate moves to its place in the batch's ray list. */
+__kernel void rtcd_scatter(__global const rtcd_uint* first_items, __global const rtcd_uint* first_rays,
+                           rtcd_uint job_count, rtcd_uint item_count, __global const rtcd_uchar* flags,
+                           __global const rtcd_uint* slots, __global const rtcd_candidate* staging,
+                           __global rtcd_candidate* rays) {
+  rtcd_uint i = get_global_id(0);
+  if (i >= item_count || !flags[i]) return;
+  rays[first_rays[rtcd_job_of(first_items, job_count, i)] + slots[i]] = staging[i];
+}
+
+/* One candidate ray: its full trace, or its walks (trace.h). */
+__kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
+                         __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
+                         __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
+                         __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
+                         __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
+                         rtcd_uint ray_count, __global rtcd_outcome* outcomes) {
+  rtcd_uint i = get_global_id(0);
+  rtcd_candidate c;
+  rtcd_trace_params p;
+  rtcd_device_shape shape;
+  rtcd_outcome o;
+  if (i >= ray_count) return;
+  c = rays[i];
+  p = jobs[c.job].params;
+  shape = shapes[jobs[c.job].target];
+  rtcd_outcome_init(&o, c.vertex);
+  if (shape.kind == RTCD_TARGET_MESH) {
+    rtcd_tracer t;
+    t.positions = positions + shape.first_vertex;
+    t.triangles = triangles + 3 * shape.first_triangle;
+    t.neighbors = neighbors + 3 * shape.first_triangle;
+    t.zero_area = zero_area + shape.first_triangle;
+    t.normals = normals + shape.first_triangle;
+    t.nodes = nodes + shape.first_node;
+    t.primitives = primitives + shape.first_primitive;
+    t.triangle_count = shape.triangle_count;
+    t.node_count = shape.node_count;
+    if (p.iterative) rtcd_walk_trace(&t, &p, &c, &o);
+    else rtcd_full_trace(&t, &p, &c, 0, &o);
+  } else {
+    rtcd_volume_trace(shape.kind, shape.radius, shape.half_extents, &p, &c, &o);
+  }
+  outcomes[i] = o;
+}

@@ -1,0 +1,717 @@
+// The OpenCL executor. Shapes are copied to every device once (at the first
+// step after they are added); each step's pair-directions are spread over
+// the devices (least loaded by expected rays), each device with its own
+// queue, and all devices run at once:
+//   1. rtcd_select: every possible ray (source vertex, or tracked ray) placed
+//      in the target's frame in double and flagged when it is a candidate
+//      (the host places them when a device lacks fp64);
+//   2. rtcd_count: per job, a prefix sum over the flags, so the candidates
+//      form a compacted list in the CPU's order; the counts come back;
+//   3. rtcd_scatter and rtcd_trace: candidates to their places, then one
+//      work-item per ray running kernel/trace.h; the outcomes come back and
+//      are written into each job's slot, so the step is in job order.
+// Any fault (no platform, a failed build, out of memory, a device error)
+// is reported once and the step, and every later one, runs on the CPU
+// executor from the same jobs, so the result does not change.
+#include "opencl_backend.hpp"
+
+#include <CL/opencl.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <iostream>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+#include "bvh.hpp"
+#include "device_types.h"
+#include "rtcd/error.hpp"
+
+namespace rtcd {
+namespace opencl_source {
+extern const char* const kKernels;
+}
+
+namespace {
+
+static_assert(sizeof(rtcd_tracked) == sizeof(TrackedRay));
+static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
+// The kernels read the buffers with OpenCL C's layout of the same structs:
+// only 4-byte members (8 in rtcd_frame), so no padding differs.
+static_assert(sizeof(rtcd_outcome) == 28 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 48);
+static_assert(sizeof(rtcd_device_job) == 72 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8);
+
+constexpr size_t kGroupSize = 64;
+
+std::atomic<OpenClFault> g_injected{OpenClFault::none};
+
+OpenClFault requested_fault() {
+  if (g_injected != OpenClFault::none) return g_injected;
+  const char* text = std::getenv("RTCD_OPENCL_FAULT");
+  if (!text || !*text) return OpenClFault::none;
+  const std::string s = text;
+  if (s == "no_platform") return OpenClFault::no_platform;
+  if (s == "build") return OpenClFault::build;
+  if (s == "out_of_memory") return OpenClFault::out_of_memory;
+  if (s == "mid_step") return OpenClFault::mid_step;
+  throw BackendError("RTCD_OPENCL_FAULT='" + s + "': expected no_platform, build, out_of_memory or mid_step");
+}
+
+bool env_flag(const char* name) {
+  const char* text = std::getenv(name);
+  return text && *text && std::string(text) != "0";
+}
+
+// A bad name or device index: the caller's mistake, not a fault to survive.
+class NameError : public BackendError {
+ public:
+  using BackendError::BackendError;
+};
+
+struct Selection {
+  bool bvh = true;
+  cl_device_type type = CL_DEVICE_TYPE_ALL;
+  std::vector<size_t> indices;  // empty: every device
+};
+
+Selection parse_name(const std::string& name) {
+  Selection s;
+  std::string rest;
+  if (name.rfind("opencl-basic", 0) == 0) {
+    s.bvh = false;
+    rest = name.substr(12);
+  } else if (name.rfind("opencl", 0) == 0) {
+    rest = name.substr(6);
+  }
+  auto bad = [&](const std::string& why) {
+    return NameError("backend '" + name + "': " + why +
+                     " (expected opencl or opencl-basic, then :gpu, :cpu or :devices=0,1)");
+  };
+  if (!is_opencl_name(name)) throw bad("not an OpenCL backend name");
+  while (!rest.empty()) {
+    if (rest[0] != ':') throw bad("options follow a ':'");
+    const size_t next = rest.find(':', 1);
+    const std::string option = rest.substr(1, next == std::string::npos ? std::string::npos : next - 1);
+    rest = next == std::string::npos ? "" : rest.substr(next);
+    if (option == "gpu") {
+      s.type = CL_DEVICE_TYPE_GPU;
+    } else if (option == "cpu") {
+      s.type = CL_DEVICE_TYPE_CPU;
+    } else if (option.rfind("devices=", 0) == 0) {
+      std::stringstream list(option.substr(8));
+      std::string item;
+      while (std::getline(list, item, ',')) {
+        if (item.empty() || item.find_first_not_of("0123456789") != std::string::npos) throw bad("bad device index '" + item + "'");
+        const size_t index = std::stoul(item);
+        if (std::find(s.indices.begin(), s.indices.end(), index) != s.indices.end()) throw bad("device " + item + " twice");
+        s.indices.push_back(index);
+      }
+      if (s.indices.empty()) throw bad("no device index");
+    } else {
+      throw bad("unknown option '" + option + "'");
+    }
+  }
+  return s;
+}
+
+std::string error_name(cl_int code) {
+  switch (code) {
+    case CL_DEVICE_NOT_FOUND: return "CL_DEVICE_NOT_FOUND";
+    case CL_MEM_OBJECT_ALLOCATION_FAILURE: return "CL_MEM_OBJECT_ALLOCATION_FAILURE (out of device memory)";
+    case CL_OUT_OF_RESOURCES: return "CL_OUT_OF_RESOURCES";
+    case CL_OUT_OF_HOST_MEMORY: return "CL_OUT_OF_HOST_MEMORY";
+    case CL_BUILD_PROGRAM_FAILURE: return "CL_BUILD_PROGRAM_FAILURE";
+    case CL_INVALID_BUFFER_SIZE: return "CL_INVALID_BUFFER_SIZE";
+    case CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST: return "CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST";
+    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL platform installed)";
+    default: return "OpenCL error " + std::to_string(code);
+  }
+}
+
+std::string describe(const cl::Error& e) { return std::string(e.what()) + ": " + error_name(e.err()); }
+
+struct Found {
+  cl::Platform platform;
+  std::vector<cl::Device> devices;
+};
+
+// The first platform with devices of the selection's type, and the chosen
+// ones among them. BackendError when there are none; NameError for an index
+// past the platform's devices.
+Found find_devices(const Selection& s) {
+  std::vector<cl::Platform> platforms;
+  try {
+    cl::Platform::get(&platforms);
+  } catch (const cl::Error& e) {
+    throw BackendError("no OpenCL platform (" + describe(e) + ")");
+  }
+  for (const cl::Platform& platform : platforms) {
+    std::vector<cl::Device> devices;
+    try {
+      platform.getDevices(s.type, &devices);
+    } catch (const cl::Error&) {
+      continue;  // CL_DEVICE_NOT_FOUND: none of this type here
+    }
+    if (devices.empty()) continue;
+    if (s.indices.empty()) return {platform, devices};
+    Found found{platform, {}};
+    for (size_t i : s.indices) {
+      if (i >= devices.size())
+        throw NameError("OpenCL device " + std::to_string(i) + " does not exist: " +
+                        platform.getInfo<CL_PLATFORM_NAME>() + " has " + std::to_string(devices.size()));
+      found.devices.push_back(devices[i]);
+    }
+    return found;
+  }
+  throw BackendError(platforms.empty() ? "no OpenCL platform" : "no OpenCL device of the requested type");
+}
+
+bool has_fp64(const cl::Device& d) { return d.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos; }
+bool rounds_division(const cl::Device& d) {
+  return (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
+}
+
+std::string describe(const cl::Platform& platform, const cl::Device& d, size_t index) {
+  std::ostringstream s;
+  s << '[' << index << "] " << d.getInfo<CL_DEVICE_NAME>() << " (" << platform.getInfo<CL_PLATFORM_NAME>() << "), "
+    << d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>() << " compute units, "
+    << d.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>() / (1024 * 1024) << " MiB, " << (has_fp64(d) ? "fp64" : "no fp64");
+  return s.str();
+}
+
+// A context and a built program for a device set, shared by every narrow
+// phase of the process that asks for the same set (building takes long).
+struct Runtime {
+  cl::Context context;
+  std::vector<cl::Device> devices;
+  cl::Program program;
+  bool place_on_device = true;  // every device has fp64: rays are placed there
+  std::vector<std::string> descriptions;
+};
+
+std::shared_ptr<const Runtime> acquire_runtime(const Selection& s, OpenClFault fault) {
+  if (fault == OpenClFault::no_platform) throw BackendError("no OpenCL platform (injected fault)");
+  const bool host_places = env_flag("RTCD_OPENCL_NO_FP64");
+  std::ostringstream key;
+  key << s.bvh << '/' << s.type << '/' << host_places << '/' << (fault == OpenClFault::build);
+  for (size_t i : s.indices) key << ',' << i;
+  static std::mutex mutex;
+  // Never destroyed: releasing OpenCL objects after the driver has unloaded
+  // at exit crashes some ICDs.
+  static auto* cache = new std::map<std::string, std::shared_ptr<const Runtime>>;
+  std::lock_guard lock(mutex);
+  if (auto it = cache->find(key.str()); it != cache->end()) return it->second;
+
+  const Found found = find_devices(s);
+  auto runtime = std::make_shared<Runtime>();
+  runtime->devices = found.devices;
+  runtime->context = cl::Context(found.devices);
+  bool rounded = true;
+  for (const cl::Device& d : found.devices) {
+    runtime->place_on_device = runtime->place_on_device && has_fp64(d) && !host_places;
+    rounded = rounded && rounds_division(d);
+  }
+  // The CPU's arithmetic: OpenCL 1.2 otherwise allows a few ulp in division
+  // and sqrt, which decide walks' edge tests; contraction is off in types.h.
+  std::string options = "-cl-std=CL1.2";
+  if (rounded) options += " -cl-fp32-correctly-rounded-divide-sqrt";
+  if (s.bvh) options += " -DRTCD_BVH";
+  if (!runtime->place_on_device) options += " -DRTCD_NO_FP64";
+  if (fault == OpenClFault::build) options += " -DRTCD_INJECTED_BUILD_FAILURE";
+  runtime->program = cl::Program(runtime->context, std::string(opencl_source::kKernels));
+  try {
+    runtime->program.build(found.devices, options.c_str());
+  } catch (const cl::BuildError& e) {
+    std::string log;
+    for (const auto& [device, text] : e.getBuildLog()) log += text;
+    if (log.size() > 2000) log = log.substr(0, 2000) + " ...";
+    throw BackendError("the kernels failed to build with '" + options + "': " + log);
+  } catch (const cl::Error& e) {
+    throw BackendError("the kernels failed to build with '" + options + "': " + describe(e));
+  }
+  for (size_t i = 0; i < found.devices.size(); ++i) {
+    std::string text = describe(found.platform, found.devices[i], s.indices.empty() ? i : s.indices[i]);
+    text += runtime->place_on_device ? "; rays placed in double on the device" : "; rays placed in double on the host";
+    if (!rounded) text += "; division and sqrt not correctly rounded (walks may differ from the CPU)";
+    text += s.bvh ? "; BVH tracer" : "; brute-force tracer";
+    runtime->descriptions.push_back(text);
+  }
+  (*cache)[key.str()] = runtime;
+  return runtime;
+}
+
+// The concatenated shape data every device holds.
+struct ShapeData {
+  std::vector<rtcd_device_shape> table;
+  std::vector<rtcd_vec3> positions, normals, origins, directions;
+  std::vector<rtcd_uint> triangles, primitives;
+  std::vector<rtcd_int> neighbors;
+  std::vector<rtcd_uchar> zero_area;
+  std::vector<rtcd_bvh_node> nodes;
+
+  template <class T, class S>
+  static void append(std::vector<T>& to, const S& from) {
+    const auto* data = reinterpret_cast<const T*>(from.data());
+    to.insert(to.end(), data, data + from.size() * sizeof(from[0]) / sizeof(T));
+  }
+
+  void add(const Shape& shape, bool bvh) {
+    rtcd_device_shape d{};
+    d.first_vertex = rtcd_uint(positions.size());
+    d.first_triangle = rtcd_uint(triangles.size() / 3);
+    d.first_node = rtcd_uint(nodes.size());
+    d.first_primitive = rtcd_uint(primitives.size());
+    d.first_source = rtcd_uint(origins.size());
+    d.source_count = rtcd_uint(shape.sources().origins.size());
+    append(origins, shape.sources().origins);
+    append(directions, shape.sources().directions);
+    if (const Mesh* mesh = shape.mesh()) {
+      d.kind = RTCD_TARGET_MESH;
+      d.triangle_count = rtcd_uint(mesh->triangle_count());
+      append(positions, mesh->positions());
+      append(triangles, mesh->triangles());
+      append(neighbors, mesh->neighbors());
+      append(normals, mesh->triangle_normals());
+      zero_area.insert(zero_area.end(), mesh->zero_area().begin(), mesh->zero_area().end());
+      if (bvh) {
+        const FlatBvh tree = build_flat_bvh(*mesh);
+        d.node_count = rtcd_uint(tree.nodes.size());
+        nodes.insert(nodes.end(), tree.nodes.begin(), tree.nodes.end());
+        primitives.insert(primitives.end(), tree.primitives.begin(), tree.primitives.end());
+      }
+    } else if (const auto* sphere = std::get_if<Sphere>(&shape.geometry())) {
+      d.kind = RTCD_TARGET_SPHERE;
+      d.radius = float(sphere->radius);
+    } else if (const auto* box = std::get_if<Box>(&shape.geometry())) {
+      d.kind = RTCD_TARGET_BOX;
+      const Eigen::Vector3f h = box->half_extents.cast<float>();
+      d.half_extents = rtcd_v3(h.x(), h.y(), h.z());
+    } else {
+      d.kind = RTCD_TARGET_HALFSPACE;
+    }
+    table.push_back(d);
+  }
+};
+
+// A device buffer that keeps its capacity from step to step.
+struct GrowingBuffer {
+  cl::Buffer buffer;
+  size_t bytes = 0;
+};
+
+struct Device {
+  cl::CommandQueue queue;
+  cl::Kernel select, count, scatter, trace;
+  // Shape data, in ShapeData's order.
+  std::vector<cl::Buffer> shapes;
+  size_t shapes_uploaded = 0;
+  GrowingBuffer jobs, first_items, frames, tracked, flags, staging, slots, counts, first_rays, rays, outcomes;
+  // This batch: the jobs it runs (batch indices) and their host-side data.
+  std::vector<uint32_t> batch_jobs;
+  std::vector<rtcd_device_job> host_jobs;
+  std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
+  std::vector<rtcd_frame> host_frames;
+  std::vector<rtcd_tracked> host_tracked;
+  std::vector<rtcd_candidate> host_rays;
+  std::vector<rtcd_outcome> host_outcomes;
+  uint32_t items = 0, ray_count = 0;
+  size_t load = 0;
+  size_t group_size = 1;
+  cl::Event counts_read, outcomes_read;
+};
+
+class OpenClExecutor final : public RayExecutor {
+ public:
+  OpenClExecutor(std::string name, std::shared_ptr<const Runtime> runtime, std::string setup_fault, bool bvh,
+                 OpenClFault fault, CpuFallback fallback)
+      : name_(std::move(name)), runtime_(std::move(runtime)), bvh_(bvh), fault_(fault), fallback_(std::move(fallback)) {
+    if (!setup_fault.empty()) {
+      fail(setup_fault);
+      return;
+    }
+    try {
+      for (const cl::Device& d : runtime_->devices) {
+        Device device;
+        device.queue = cl::CommandQueue(runtime_->context, d);
+        if (runtime_->place_on_device) device.select = cl::Kernel(runtime_->program, "rtcd_select");
+        device.count = cl::Kernel(runtime_->program, "rtcd_count");
+        device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
+        device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
+        device.group_size = kGroupSize;
+        for (const cl::Kernel* k : {&device.select, &device.count, &device.scatter, &device.trace})
+          if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
+        devices_.push_back(std::move(device));
+      }
+    } catch (const cl::Error& e) {
+      fail(describe(e));
+    }
+  }
+
+  ~OpenClExecutor() override { settle(); }
+
+  void add_shape(std::shared_ptr<const Shape> shape) override {
+    if (fault_message_.empty()) data_.add(*shape, bvh_);
+    if (cpu_) cpu_->add_shape(shape);
+    shapes_.push_back(std::move(shape));
+  }
+
+  void execute(std::span<const RayJob> jobs, const Config& config,
+               std::span<std::vector<RayOutcome>> outcomes) override {
+    if (fault_message_.empty()) {
+      try {
+        run(jobs, config, outcomes);
+        return;
+      } catch (const cl::Error& e) {
+        fail(describe(e) + " during a step");
+      } catch (const Error& e) {
+        fail(e.what());
+      }
+    }
+    cpu().execute(jobs, config, outcomes);
+  }
+
+ private:
+  // Waits until no device writes into host memory any more; errors are
+  // already being handled.
+  void settle() {
+    for (Device& d : devices_) {
+      try {
+        d.queue.finish();
+      } catch (...) {
+      }
+    }
+  }
+
+  void fail(const std::string& what) {
+    settle();
+    fault_message_ = what;
+    std::cerr << "rtcd: " << name_ << ": " << what << "; this step and the following run on the CPU ("
+              << fallback_.name << ")\n";
+  }
+
+  RayExecutor& cpu() {
+    if (!cpu_) {
+      cpu_ = make_cpu_executor(fallback_.tracers());
+      for (const auto& shape : shapes_) cpu_->add_shape(shape);
+    }
+    return *cpu_;
+  }
+
+  cl::Buffer allocate(size_t bytes, cl_mem_flags flags, void* host = nullptr) {
+    if (fault_ == OpenClFault::out_of_memory)
+      throw cl::Error(CL_MEM_OBJECT_ALLOCATION_FAILURE, "clCreateBuffer (injected fault)");
+    return cl::Buffer(runtime_->context, flags, bytes, host);
+  }
+
+  template <class T>
+  cl::Buffer upload_once(const std::vector<T>& v) {
+    if (v.empty()) return allocate(sizeof(T), CL_MEM_READ_ONLY);  // no zero-size buffers in OpenCL
+    return allocate(v.size() * sizeof(T), CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, const_cast<T*>(v.data()));
+  }
+
+  void upload_shapes(Device& d) {
+    if (d.shapes_uploaded == data_.table.size()) return;
+    d.shapes = {upload_once(data_.table),     upload_once(data_.positions), upload_once(data_.triangles),
+                upload_once(data_.neighbors), upload_once(data_.zero_area), upload_once(data_.normals),
+                upload_once(data_.nodes),     upload_once(data_.primitives), upload_once(data_.origins),
+                upload_once(data_.directions)};
+    d.shapes_uploaded = data_.table.size();
+  }
+
+  void reserve(GrowingBuffer& b, size_t bytes) {
+    bytes = std::max<size_t>(bytes, 64);
+    if (bytes <= b.bytes) return;
+    bytes = std::max(bytes, b.bytes + b.bytes / 2);
+    b.buffer = allocate(bytes, CL_MEM_READ_WRITE);
+    b.bytes = bytes;
+  }
+
+  template <class T>
+  void write(Device& d, GrowingBuffer& b, const std::vector<T>& v) {
+    reserve(b, v.size() * sizeof(T));
+    if (!v.empty()) d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, 0, v.size() * sizeof(T), v.data());
+  }
+
+  static size_t items_of(const RayJob& job, const Shape& source) {
+    if (job.overlap.empty()) return 0;
+    return job.iterative ? job.tracked.size() : source.sources().origins.size();
+  }
+
+  // Each job to the device with the fewest expected rays so far.
+  void assign(std::span<const RayJob> jobs, const Config& config) {
+    for (Device& d : devices_) {
+      d.batch_jobs.clear();
+      d.host_jobs.clear();
+      d.host_first_items.clear();
+      d.host_frames.clear();
+      d.host_tracked.clear();
+      d.items = 0;
+      d.ray_count = 0;
+      d.load = 0;
+    }
+    for (uint32_t j = 0; j < jobs.size(); ++j) {
+      const RayJob& job = jobs[j];
+      Device& d = *std::min_element(devices_.begin(), devices_.end(),
+                                    [](const Device& a, const Device& b) { return a.load < b.load; });
+      const size_t items = items_of(job, *shapes_[job.source]);
+      rtcd_device_job dj{};
+      dj.params = make_trace_params(job, *shapes_[job.target], config);
+      dj.source = job.source;
+      dj.target = job.target;
+      dj.first_item = d.items;
+      dj.item_count = rtcd_uint(items);
+      dj.first_tracked = rtcd_uint(d.host_tracked.size());
+      if (job.iterative && items > 0) {
+        const auto* tracked = reinterpret_cast<const rtcd_tracked*>(job.tracked.data());
+        d.host_tracked.insert(d.host_tracked.end(), tracked, tracked + job.tracked.size());
+      }
+      d.batch_jobs.push_back(j);
+      d.host_jobs.push_back(dj);
+      d.host_first_items.push_back(d.items);
+      d.host_frames.push_back(make_frame(job));
+      d.items += rtcd_uint(items);
+      d.load += items;
+    }
+  }
+
+  // The host's placement, for devices without fp64: the same rtcd_place_ray.
+  void place_on_host(Device& d) {
+    d.host_rays.clear();
+    for (uint32_t l = 0; l < d.host_jobs.size(); ++l) {
+      const rtcd_device_job& job = d.host_jobs[l];
+      const RaySources& rs = shapes_[job.source]->sources();
+      for (uint32_t k = 0; k < job.item_count; ++k) {
+        rtcd_candidate c{k, -1, -1, l, {}, {}};
+        if (job.params.iterative) {
+          const rtcd_tracked& r = d.host_tracked[job.first_tracked + k];
+          c.vertex = r.vertex;
+          c.start = r.triangle;
+          c.entry = r.entry;
+        }
+        const auto& o = rs.origins[c.vertex];
+        const auto& dir = rs.directions[c.vertex];
+        if (rtcd_place_ray(&d.host_frames[l], rtcd_v3(o.x(), o.y(), o.z()), rtcd_v3(dir.x(), dir.y(), dir.z()),
+                           &c.origin, &c.direction)) {
+          d.host_rays.push_back(c);
+          ++d.host_counts[l];
+        }
+      }
+    }
+  }
+
+  void first_rays(Device& d) {
+    d.host_first_rays.resize(d.host_counts.size());
+    uint32_t n = 0;
+    for (size_t l = 0; l < d.host_counts.size(); ++l) {
+      d.host_first_rays[l] = n;
+      n += d.host_counts[l];
+    }
+    d.ray_count = n;
+  }
+
+  // A fixed work-group size, the global size rounded up to it (kernels
+  // ignore the excess): drivers such as PoCL compile a kernel again for
+  // every new work-group size they would pick themselves.
+  static void launch(Device& d, cl::Kernel& k, size_t n) {
+    const size_t group = d.group_size;
+    d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + group - 1) / group * group), cl::NDRange(group));
+  }
+
+  void enqueue_trace(Device& d) {
+    reserve(d.outcomes, d.ray_count * sizeof(rtcd_outcome));
+    d.host_outcomes.resize(d.ray_count);
+    cl::Kernel& k = d.trace;
+    for (int i = 0; i < 8; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);  // table .. primitives
+    k.setArg(0, d.jobs.buffer);
+    k.setArg(9, d.rays.buffer);
+    k.setArg(10, rtcd_uint(d.ray_count));
+    k.setArg(11, d.outcomes.buffer);
+    launch(d, k, d.ray_count);
+    d.queue.enqueueReadBuffer(d.outcomes.buffer, CL_FALSE, 0, d.ray_count * sizeof(rtcd_outcome),
+                              d.host_outcomes.data(), nullptr, &d.outcomes_read);
+    d.queue.flush();
+  }
+
+  // Phase 1, on the device: candidates placed and flagged, counted per job;
+  // the counts come back.
+  void place_on_device(Device& d) {
+    const auto jobs_count = rtcd_uint(d.host_jobs.size());
+    write(d, d.jobs, d.host_jobs);
+    write(d, d.first_items, d.host_first_items);
+    write(d, d.frames, d.host_frames);
+    write(d, d.tracked, d.host_tracked);
+    reserve(d.flags, d.items);
+    reserve(d.staging, d.items * sizeof(rtcd_candidate));
+    reserve(d.slots, d.items * sizeof(rtcd_uint));
+    reserve(d.counts, jobs_count * sizeof(rtcd_uint));
+    cl::Kernel& s = d.select;
+    s.setArg(0, d.jobs.buffer);
+    s.setArg(1, d.first_items.buffer);
+    s.setArg(2, d.frames.buffer);
+    s.setArg(3, jobs_count);
+    s.setArg(4, rtcd_uint(d.items));
+    s.setArg(5, d.shapes[0]);
+    s.setArg(6, d.shapes[8]);
+    s.setArg(7, d.shapes[9]);
+    s.setArg(8, d.tracked.buffer);
+    s.setArg(9, d.flags.buffer);
+    s.setArg(10, d.staging.buffer);
+    launch(d, s, d.items);
+    cl::Kernel& c = d.count;
+    c.setArg(0, d.jobs.buffer);
+    c.setArg(1, jobs_count);
+    c.setArg(2, d.flags.buffer);
+    c.setArg(3, d.slots.buffer);
+    c.setArg(4, d.counts.buffer);
+    launch(d, c, jobs_count);
+    d.queue.enqueueReadBuffer(d.counts.buffer, CL_FALSE, 0, jobs_count * sizeof(rtcd_uint), d.host_counts.data(),
+                              nullptr, &d.counts_read);
+    d.queue.flush();
+  }
+
+  // One device's share of the batch, start to end. Each device is driven
+  // from its own host thread: some drivers (PoCL's `basic`) run a device's
+  // commands in the thread that flushes or waits on it.
+  void run_on(Device& d, bool inject_mid_step) {
+    d.host_counts.assign(d.host_jobs.size(), 0);
+    if (d.items == 0) {
+      d.ray_count = 0;
+      return;
+    }
+    upload_shapes(d);
+    if (!runtime_->place_on_device) {
+      place_on_host(d);
+    } else {
+      place_on_device(d);
+    }
+    if (inject_mid_step) throw cl::Error(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel (injected fault)");
+    // Phase 2: compaction and tracing; the outcomes come back.
+    if (runtime_->place_on_device) d.counts_read.wait();
+    first_rays(d);
+    if (d.ray_count == 0) return;
+    if (runtime_->place_on_device) {
+      const auto jobs_count = rtcd_uint(d.host_jobs.size());
+      write(d, d.first_rays, d.host_first_rays);
+      reserve(d.rays, d.ray_count * sizeof(rtcd_candidate));
+      cl::Kernel& k = d.scatter;
+      k.setArg(0, d.first_items.buffer);
+      k.setArg(1, d.first_rays.buffer);
+      k.setArg(2, jobs_count);
+      k.setArg(3, rtcd_uint(d.items));
+      k.setArg(4, d.flags.buffer);
+      k.setArg(5, d.slots.buffer);
+      k.setArg(6, d.staging.buffer);
+      k.setArg(7, d.rays.buffer);
+      launch(d, k, d.items);
+    } else {
+      write(d, d.jobs, d.host_jobs);
+      write(d, d.rays, d.host_rays);
+    }
+    enqueue_trace(d);
+    d.outcomes_read.wait();
+  }
+
+  void run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes) {
+    assign(jobs, config);
+    // The injected mid-step fault strikes the second batch with work, after
+    // its first kernels were enqueued.
+    bool work = false;
+    for (const Device& d : devices_) work = work || d.items > 0;
+    batches_ += work;
+    const bool inject_mid_step = fault_ == OpenClFault::mid_step && batches_ == 2;
+    if (devices_.size() == 1) {
+      run_on(devices_[0], inject_mid_step);
+    } else {
+      tbb::parallel_for(
+          tbb::blocked_range<size_t>(0, devices_.size(), 1),
+          [&](const tbb::blocked_range<size_t>& r) {
+            for (size_t i = r.begin(); i != r.end(); ++i) run_on(devices_[i], inject_mid_step);
+          },
+          tbb::simple_partitioner());
+    }
+    // Each job's outcomes into its own slot: the step keeps job order.
+    for (Device& d : devices_) {
+      for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
+        std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
+        const uint32_t n = d.ray_count == 0 ? 0 : d.host_counts[l];
+        out.resize(n);
+        for (uint32_t k = 0; k < n; ++k) out[k] = to_ray_outcome(d.host_outcomes[d.host_first_rays[l] + k]);
+      }
+    }
+  }
+
+  std::string name_;
+  std::shared_ptr<const Runtime> runtime_;
+  bool bvh_;
+  OpenClFault fault_;
+  CpuFallback fallback_;
+  std::string fault_message_;  // set once the devices are given up
+  std::vector<std::shared_ptr<const Shape>> shapes_;
+  ShapeData data_;
+  std::vector<Device> devices_;
+  std::unique_ptr<RayExecutor> cpu_;
+  uint64_t batches_ = 0;  // batches with rays
+};
+
+}  // namespace
+
+bool is_opencl_name(const std::string& name) {
+  for (const char* base : {"opencl-basic", "opencl"}) {
+    const std::string b = base;
+    if (name.rfind(b, 0) == 0 && (name.size() == b.size() || name[b.size()] == ':')) return true;
+  }
+  return false;
+}
+
+std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const std::string& name, const Config& config,
+                                                      CpuFallback fallback) {
+  config.validate();
+  const Selection selection = parse_name(name);
+  const OpenClFault fault = requested_fault();
+  std::shared_ptr<const Runtime> runtime;
+  std::string setup_fault;
+  std::vector<std::string> devices;
+  try {
+    runtime = acquire_runtime(selection, fault);
+    devices = runtime->descriptions;
+  } catch (const NameError&) {
+    throw;
+  } catch (const Error& e) {
+    setup_fault = e.what();
+  } catch (const cl::Error& e) {
+    setup_fault = describe(e);
+  }
+  if (!setup_fault.empty()) devices = {"cpu fallback (" + fallback.name + "): " + setup_fault};
+  auto executor = std::make_unique<OpenClExecutor>(name, std::move(runtime), setup_fault, selection.bvh, fault,
+                                                   std::move(fallback));
+  return make_pipeline_narrow_phase(name, std::move(devices), std::move(executor), config);
+}
+
+std::vector<BackendInfo> opencl_backend_infos() {
+  // Platforms do not come and go within a process.
+  static const std::vector<BackendInfo> infos = [] {
+    std::vector<BackendInfo> list;
+    try {
+      const Found found = find_devices(Selection{});
+      std::string devices;
+      for (size_t i = 0; i < found.devices.size(); ++i)
+        devices += (i ? "; " : "") + describe(found.platform, found.devices[i], i);
+      list.push_back({"opencl", true, "stackless BVH on " + devices});
+      list.push_back({"opencl-basic", true, "every ray against every triangle on " + devices});
+    } catch (const std::exception& e) {
+      list.push_back({"opencl", false, e.what()});
+      list.push_back({"opencl-basic", false, e.what()});
+    }
+    return list;
+  }();
+  return infos;
+}
+
+void inject_opencl_fault(OpenClFault fault) { g_injected = fault; }
+
+}  // namespace rtcd

@@ -1,0 +1,136 @@
+/* One candidate ray's work in a step, written once for every executor: the
+ * full trace (inward ray, predictive ray, watched vertices), the walks of an
+ * iterative step with their re-trace, and the exact line tests of volumes.
+ *
+ * The includer supplies the mesh tracer before including this header:
+ *   typedef ... rtcd_tracer;
+ *   rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer*, const rtcd_ray*, float t_max);
+ *   rtcd_int rtcd_tracer_nearest(const rtcd_tracer*, rtcd_vec3 point, float radius);
+ *   rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer*, const rtcd_ray*, rtcd_int start, rtcd_uint max_steps);
+ *   int rtcd_tracer_leaves(const rtcd_tracer*, rtcd_int triangle, rtcd_vec3 direction);
+ *     (direction . the triangle's unit normal > 0)
+ * The CPU executor backs it with a MeshTracer, the device with its own
+ * brute-force or BVH traversal over buffers. */
+#ifndef RTCD_KERNEL_TRACE_H
+#define RTCD_KERNEL_TRACE_H
+
+#include "classify.h"
+#include "tracer.h"
+#include "volumes.h"
+#include "walk.h"
+
+/* Full tracing of one mesh ray: the inward ray; if it does not leave the
+ * target, the predictive ray; if neither meets it and the vertex is within
+ * reach of the target's box, it is watched. What serves only later walks
+ * (the entry face of a penetrating ray, a watched vertex's nearest
+ * triangle) is found only when `walking` (a walk's re-trace), so full steps
+ * of pairs traced in full again cost no more. Sets kind, triangle and t;
+ * may set entry, predictive_cast and nearest_query. */
+RTCD_INLINE void rtcd_full_trace(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
+                                 int walking, rtcd_outcome* o) {
+  rtcd_ray inward = rtcd_make_ray(c->origin, c->direction);
+  rtcd_ray outward = rtcd_make_ray(c->origin, rtcd_neg(c->direction));
+  rtcd_hit in, out;
+  rtcd_int near;
+  o->kind = RTCD_RAY_DROPPED;
+  o->triangle = -1;
+  o->t = 0.0f;
+  /* Inward ray: a first hit leaving the target means the origin is inside. */
+  in = rtcd_tracer_first_hit(tracer, &inward, 3.0e38f);
+  if (in.triangle >= 0 && rtcd_tracer_leaves(tracer, in.triangle, c->direction)) {
+    o->kind = RTCD_RAY_PENETRATING;
+    o->triangle = in.triangle;
+    o->t = in.t;
+    /* Where the line entered, behind the vertex: the next walks check the
+     * vertex is still past it. */
+    if (walking) {
+      rtcd_hit back = rtcd_tracer_first_hit(tracer, &outward, 3.0e38f);
+      if (back.triangle >= 0 && !rtcd_tracer_leaves(tracer, back.triangle, c->direction)) o->entry = back.triangle;
+    }
+    return;
+  }
+  if (!p->predictive) return;
+  /* Predictive ray: outward, no further than distance_extension. */
+  out = rtcd_tracer_first_hit(tracer, &outward, p->extension);
+  o->predictive_cast = 1;
+  if (out.triangle >= 0 && rtcd_tracer_leaves(tracer, out.triangle, c->direction)) {
+    o->kind = RTCD_RAY_PREDICTIVE;
+    o->triangle = out.triangle;
+    o->t = -out.t;
+    return;
+  }
+  if (!p->watch || !rtcd_inside_box(c->origin, p->watch_lo, p->watch_hi)) return;
+  if (!walking) {
+    o->kind = RTCD_RAY_WATCHED; /* triangle -1: looked up if the pair walks */
+    return;
+  }
+  o->nearest_query = 1;
+  near = rtcd_tracer_nearest(tracer, c->origin, p->reach);
+  if (near >= 0) {
+    o->kind = RTCD_RAY_WATCHED;
+    o->triangle = near;
+  }
+}
+
+/* An iterative step's mesh ray: the exit walk from the tracked triangle (a
+ * watched vertex first looks up its nearest triangle), the entry walk for a
+ * hit, rtcd_walked_kind's verdict, and the full re-trace it may ask for. */
+RTCD_INLINE void rtcd_walk_trace(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
+                                 rtcd_outcome* o) {
+  rtcd_ray ray = rtcd_make_ray(c->origin, c->direction);
+  rtcd_int start = c->start;
+  rtcd_walk_result exit_walk, entry_walk;
+  int kind, located;
+  if (start < 0) {
+    /* Watched since the full step, its nearest triangle not looked up yet:
+     * done now that the pair walks. */
+    o->nearest_query = 1;
+    start = rtcd_tracer_nearest(tracer, c->origin, p->reach);
+    if (start < 0) return; /* dropped: nothing within reach */
+  }
+  exit_walk = rtcd_tracer_walk(tracer, &ray, start, p->max_walk_steps);
+  o->walk_steps += exit_walk.steps;
+  o->status = (rtcd_uchar)exit_walk.status;
+  entry_walk.status = RTCD_LINE_MISS;
+  entry_walk.triangle = -1;
+  entry_walk.t = 0.0f;
+  entry_walk.steps = 0;
+  if (exit_walk.status == RTCD_LINE_HIT && c->entry >= 0) {
+    entry_walk = rtcd_tracer_walk(tracer, &ray, c->entry, p->max_walk_steps);
+    o->walk_steps += entry_walk.steps;
+  }
+  /* near = 0: a mesh's box is a weak bound on the distance to its surface
+   * (a concave mesh's box holds most vertices near it), and keeping every
+   * vertex in it walking cost 60% more per steady step (rtcd_bench
+   * iterative/64) for no missed ray in the validation. */
+  kind = rtcd_walked_kind(exit_walk.status, exit_walk.t, entry_walk.status, entry_walk.t, p->predictive, p->watch, 0,
+                          p->extension);
+  if (kind < 0) {
+    o->retraced = 1;
+    rtcd_full_trace(tracer, p, c, 1, o);
+    return;
+  }
+  located = exit_walk.status == RTCD_LINE_HIT || exit_walk.status == RTCD_LINE_BEHIND ||
+            exit_walk.status == RTCD_LINE_FRONT;
+  o->kind = (rtcd_uchar)kind;
+  o->triangle = located ? exit_walk.triangle : start;
+  o->t = exit_walk.t;
+  if (kind == RTCD_RAY_PENETRATING) o->entry = entry_walk.triangle;
+}
+
+/* A ray against a volume: the line test is exact, in both modes; a
+ * candidate neither inside nor about to enter is watched while it stays
+ * near, in full steps as in iterative ones. */
+RTCD_INLINE void rtcd_volume_trace(int target_kind, float radius, rtcd_vec3 half_extents,
+                                   const rtcd_trace_params* p, const rtcd_candidate* c, rtcd_outcome* o) {
+  rtcd_volume_hit h = target_kind == RTCD_TARGET_SPHERE ? rtcd_sphere_line(c->origin, c->direction, radius)
+                      : target_kind == RTCD_TARGET_BOX  ? rtcd_box_line(c->origin, c->direction, half_extents)
+                                                        : rtcd_halfspace_line(c->origin, c->direction);
+  o->status = (rtcd_uchar)h.status;
+  o->kind = (rtcd_uchar)rtcd_line_kind(h.status, h.t, p->predictive, p->watch,
+                                       rtcd_inside_box(c->origin, p->watch_lo, p->watch_hi), p->extension);
+  o->t = h.t;
+  o->triangle = h.face;
+}
+
+#endif

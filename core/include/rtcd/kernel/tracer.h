@@ -1,0 +1,119 @@
+/* What every executor hands to and gets from the per-ray code of trace.h:
+ * candidate rays, per-job parameters, outcomes, the placement of a ray
+ * origin in the target's frame, and the tie rules of the full tracers. */
+#ifndef RTCD_KERNEL_TRACER_H
+#define RTCD_KERNEL_TRACER_H
+
+#include "types.h"
+
+/* What a target is, for the executors' dispatch (a mesh, or a volume of volumes.h). */
+#define RTCD_TARGET_MESH 0
+#define RTCD_TARGET_SPHERE 1
+#define RTCD_TARGET_BOX 2
+#define RTCD_TARGET_HALFSPACE 3
+
+/* First hit of a ray with a mesh; triangle -1: nothing within range. */
+typedef struct {
+  rtcd_int triangle;
+  float t;
+} rtcd_hit;
+
+/* A candidate ray in the target's frame, rounded to floats. */
+typedef struct {
+  rtcd_uint vertex;
+  rtcd_int start; /* iterative: the exit walk's first triangle (-1: look up the nearest) */
+  rtcd_int entry; /* iterative: the entry walk's first triangle (-1: unknown) */
+  rtcd_uint job;  /* the job's index in its batch (device executors) */
+  rtcd_vec3 origin;
+  rtcd_vec3 direction;
+} rtcd_candidate;
+
+/* What one candidate ray found: the fields of rtcd::RayOutcome. */
+typedef struct {
+  rtcd_uint vertex;
+  rtcd_int triangle;
+  rtcd_int entry;
+  float t;
+  rtcd_uint walk_steps;
+  rtcd_uchar kind;
+  rtcd_uchar status;
+  rtcd_uchar predictive_cast;
+  rtcd_uchar nearest_query;
+  rtcd_uchar retraced;
+} rtcd_outcome;
+
+/* One job's parameters, the same for all of its rays. */
+typedef struct {
+  /* The target's box grown by the watch reach, each bound rounded outward
+   * to float: a float origin lies in this box exactly when it lies in the
+   * double-precision box, so no device needs doubles for the test. */
+  rtcd_vec3 watch_lo;
+  rtcd_vec3 watch_hi;
+  float extension; /* distance_extension */
+  float reach;     /* the watch reach: the nearest-triangle query's radius */
+  rtcd_uint max_walk_steps;
+  rtcd_int predictive;
+  rtcd_int watch; /* vertices near the target are watched (predictive rays on, not Mode::full) */
+  rtcd_int iterative;
+} rtcd_trace_params;
+
+RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
+  o->vertex = vertex;
+  o->triangle = -1;
+  o->entry = -1;
+  o->t = 0.0f;
+  o->walk_steps = 0;
+  o->kind = 0;
+  o->status = 0;
+  o->predictive_cast = 0;
+  o->nearest_query = 0;
+  o->retraced = 0;
+}
+
+RTCD_INLINE int rtcd_inside_box(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3 hi) {
+  return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y && p.z <= hi.z;
+}
+
+/* The tie rules of the full tracers, whatever order they visit triangles
+ * in: the nearest hit within t_max, the lowest triangle id among equal
+ * distances (equally for the nearest triangle to a point). */
+RTCD_INLINE int rtcd_hit_improves(rtcd_hit best, float t, rtcd_int triangle) {
+  return t < best.t || (t == best.t && (best.triangle < 0 || triangle < best.triangle));
+}
+RTCD_INLINE int rtcd_nearer(float best_d2, rtcd_int best, float d2, rtcd_int triangle) {
+  return d2 < best_d2 || (d2 == best_d2 && (best < 0 || triangle < best));
+}
+
+#ifdef RTCD_HAS_DOUBLE
+/* The source-to-target transform and the candidate box, in double. */
+typedef struct {
+  double rotation[9]; /* row-major */
+  double translation[3];
+  double lo[3]; /* candidate box in the target frame */
+  double hi[3];
+} rtcd_frame;
+
+/* Places a source vertex's ray in the target's frame: the origin in double
+ * (rotation, then translation), tested against the candidate box in double,
+ * then rounded to float with its direction. 0: not a candidate (no
+ * direction, or outside the box). */
+RTCD_INLINE int rtcd_place_ray(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 direction, rtcd_vec3* origin_out,
+                               rtcd_vec3* direction_out) {
+  double ox = origin.x, oy = origin.y, oz = origin.z;
+  double dx = direction.x, dy = direction.y, dz = direction.z;
+  double px, py, pz;
+  if (direction.x == 0.0f && direction.y == 0.0f && direction.z == 0.0f) return 0; /* a vertex with no normal */
+  px = f->rotation[0] * ox + f->rotation[1] * oy + f->rotation[2] * oz + f->translation[0];
+  py = f->rotation[3] * ox + f->rotation[4] * oy + f->rotation[5] * oz + f->translation[1];
+  pz = f->rotation[6] * ox + f->rotation[7] * oy + f->rotation[8] * oz + f->translation[2];
+  if (!(px >= f->lo[0] && py >= f->lo[1] && pz >= f->lo[2] && px <= f->hi[0] && py <= f->hi[1] && pz <= f->hi[2]))
+    return 0;
+  *origin_out = rtcd_v3((float)px, (float)py, (float)pz);
+  *direction_out = rtcd_v3((float)(f->rotation[0] * dx + f->rotation[1] * dy + f->rotation[2] * dz),
+                           (float)(f->rotation[3] * dx + f->rotation[4] * dy + f->rotation[5] * dz),
+                           (float)(f->rotation[6] * dx + f->rotation[7] * dy + f->rotation[8] * dz));
+  return 1;
+}
+#endif
+
+#endif

@@ -1,0 +1,92 @@
+// libFuzzer harness for the OpenCL backend: the mesh_pair input
+// (pair_input.hpp) stepped on `opencl-basic` and on the CPU's `basic`; every
+// step must satisfy invariants.hpp and be the same bit for bit (contacts,
+// predictive rays, pair summaries, statistics), in every mode. The OpenCL
+// context and its built program live for the whole run (the backend keeps
+// one per device set), so an input costs a narrow phase, not a driver
+// start. PoCL's CPU devices serve (scripts/fuzz.sh sets POCL_DEVICES).
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+
+#include <tbb/global_control.h>
+
+#include "invariants.hpp"
+#include "pair_input.hpp"
+
+namespace {
+
+using namespace rtcd;
+
+tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
+
+// Aborts (a finding) when the run has no usable OpenCL device: fuzzing the
+// fallback alone would prove nothing.
+const bool have_opencl = [] {
+  for (const auto& b : available_backends())
+    if (b.name == "opencl-basic" && b.usable) return true;
+  std::fprintf(stderr, "fuzz_opencl: no usable OpenCL device (install pocl-opencl-icd)\n");
+  std::abort();
+}();
+
+bool same(const RayRecord& x, const RayRecord& y) {
+  return x.source == y.source && x.source_body == y.source_body && x.target_body == y.target_body &&
+         x.vertex == y.vertex && x.triangle == y.triangle && x.origin == y.origin && x.direction == y.direction &&
+         x.normal == y.normal;
+}
+
+// Bit-for-bit equality of two steps, but the clock readings.
+void require_same(const StepResult& x, const StepResult& y, const std::string& where) {
+  fuzz::require(x.pairs.size() == y.pairs.size() && x.contacts.size() == y.contacts.size() &&
+                    x.predictive.size() == y.predictive.size(),
+                where + ": different counts (" + std::to_string(x.contacts.size()) + " and " +
+                    std::to_string(y.contacts.size()) + " contacts)");
+  for (size_t i = 0; i < x.pairs.size(); ++i)
+    fuzz::require(x.pairs[i].colliding == y.pairs[i].colliding && x.pairs[i].mode == y.pairs[i].mode &&
+                      x.pairs[i].max_depth == y.pairs[i].max_depth,
+                  where + ": different pair summaries");
+  for (size_t k = 0; k < x.contacts.size(); ++k) {
+    const Contact &a = x.contacts[k], &b = y.contacts[k];
+    fuzz::require(same(a, b) && a.depth == b.depth && a.projected_depth == b.projected_depth && a.push == b.push,
+                  where + ": contact " + std::to_string(k) + " differs (vertex " + std::to_string(a.vertex) + ", " +
+                      std::to_string(b.vertex) + ")");
+  }
+  for (size_t k = 0; k < x.predictive.size(); ++k)
+    fuzz::require(same(x.predictive[k], y.predictive[k]) && x.predictive[k].distance == y.predictive[k].distance,
+                  where + ": predictive ray " + std::to_string(k) + " differs");
+  const StepStats &a = x.stats, &b = y.stats;
+  fuzz::require(a.candidates == b.candidates && a.rays_full == b.rays_full && a.rays_predictive == b.rays_predictive &&
+                    a.rays_iterative == b.rays_iterative && a.walk_steps == b.walk_steps &&
+                    a.nearest_queries == b.nearest_queries && a.rays_retraced == b.rays_retraced &&
+                    a.rays_watched == b.rays_watched && a.walk_endings == b.walk_endings,
+                where + ": different statistics");
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
+  const auto input = fuzz::read_pair_case(data, length);
+  if (!input) return 0;
+  const std::shared_ptr<const Shape>&shape_a = input->shape_a, &shape_b = input->shape_b;
+  const std::vector<Pose>&poses_a = input->poses_a, &poses_b = input->poses_b;
+  const Config& config = input->config;
+  const int steps = input->steps;
+  if (const char* dir = std::getenv("RTCD_FUZZ_DUMP")) fuzz::dump(dir, *shape_a, *shape_b, poses_a, poses_b, config);
+
+  const std::vector<std::string> backends = {"opencl-basic", "basic"};
+  std::vector<std::vector<StepResult>> results(backends.size());
+  for (size_t k = 0; k < backends.size(); ++k) {
+    auto narrow = make_narrow_phase(backends[k], config);
+    const ShapeId sa = narrow->add_shape(shape_a), sb = narrow->add_shape(shape_b);
+    const BodyPair pair{narrow->add_body(sa, poses_a[0]), narrow->add_body(sb, poses_b[0])};
+    for (int s = 0; s < steps; ++s) {
+      narrow->set_pose(pair.a, poses_a[s]);
+      narrow->set_pose(pair.b, poses_b[s]);
+      StepResult& out = results[k].emplace_back();
+      narrow->detect(std::span(&pair, 1), out);
+      fuzz::check_step(backends[k] + " step " + std::to_string(s), out, pair, *shape_a, *shape_b, config);
+    }
+  }
+  for (int s = 0; s < steps; ++s) require_same(results[0][s], results[1][s], "step " + std::to_string(s));
+  return 0;
+}
