@@ -285,7 +285,9 @@ std::string run_bench(const BenchOptions& o) {
     c.config.mode = mode;
     if (threshold >= 0) c.config.displacement_threshold = threshold;
     c.threads = threads;
-    c.every = mode == Mode::full && backend == "basic" ? full_every : 1;
+    // Brute force in full mode is sampled: it costs rays x triangles a step.
+    const bool brute_force = backend == "basic" || backend == "opencl-basic";
+    c.every = mode == Mode::full && brute_force ? full_every : 1;
     c.budget_seconds = o.budget_seconds;
     return c;
   };
@@ -409,7 +411,7 @@ std::string run_bench(const BenchOptions& o) {
                    "tracing once they penetrate."
                  : "within it, so predictive rays see every impact one step ahead.")
          << "\n\nPhases: " << phases.rule() << ".\n\n";
-  report << "Sampling: full tracing with the basic tracer replayed every " << full_every << " step(s), GIMPACT and FCL every " << peers_every
+  report << "Sampling: full tracing with the basic tracers (basic, opencl-basic) replayed every " << full_every << " step(s), GIMPACT and FCL every " << peers_every
          << ", rays judged by the exact reference every " << judge_every
          << "; iterative and automatic configurations run on every step. Replays on one thread unless the label says "
             "otherwise. The recording was simulated on one thread. A configuration stops once its steps have taken "
