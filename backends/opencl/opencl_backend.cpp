@@ -639,8 +639,8 @@ class OpenClExecutor final : public RayExecutor {
       for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
         std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
         const uint32_t n = d.ray_count == 0 ? 0 : d.host_counts[l];
-        out.resize(n);
-        for (uint32_t k = 0; k < n; ++k) out[k] = to_ray_outcome(d.host_outcomes[d.host_first_rays[l] + k]);
+        const rtcd_outcome* first = d.host_outcomes.data() + (n == 0 ? 0 : d.host_first_rays[l]);
+        out.assign(first, first + n);
       }
     }
   }

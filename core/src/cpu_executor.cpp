@@ -59,7 +59,7 @@ float float_at_most(double x) {
 // Most rays per parallel chunk, and the least rays worth handing to other threads:
 // a traced ray costs tens of walks, so full batches go parallel far sooner.
 constexpr size_t kChunk = 128;
-constexpr size_t kParallelWalks = 8192;
+constexpr size_t kParallelWalks = 512;
 constexpr size_t kParallelTraces = 64;
 
 class CpuExecutor final : public RayExecutor {
@@ -78,23 +78,25 @@ class CpuExecutor final : public RayExecutor {
     if (params_.size() < jobs.size()) params_.resize(jobs.size());
     size_t work = 0;
     for (const RayJob& job : jobs) work += job.iterative ? job.tracked.size() : shapes_[job.source]->sources().origins.size();
-    auto prepare = [&](size_t j) {
-      params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
-      select(jobs[j], candidates_[j]);
-      outcomes[j].resize(candidates_[j].size());
-    };
     const bool walks = !jobs.empty() && jobs.front().iterative;  // the pipeline never mixes modes in a batch
     if (walks) {
-      // Walks are short and even: one pass per job, candidates walked as found.
+      // Walks are short and even: one pass per job, each tracked ray placed
+      // and walked at once.
       for_each_index(jobs.size(), work >= kParallelWalks, [&](size_t j) {
-        prepare(j);
-        for (size_t k = 0; k < candidates_[j].size(); ++k) outcomes[j][k] = trace(jobs[j], params_[j], candidates_[j][k]);
+        params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
+        outcomes[j].clear();
+        for_each_candidate(jobs[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
       });
       return;
     }
     // Traced rays cost far more and vary: select per job, then spread the
     // batch's rays over threads in fixed chunks.
-    for_each_index(jobs.size(), work >= kParallelWalks, prepare);
+    for_each_index(jobs.size(), work >= kParallelWalks, [&](size_t j) {
+      params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
+      candidates_[j].clear();
+      for_each_candidate(jobs[j], [&](const rtcd_candidate& c) { candidates_[j].push_back(c); });
+      outcomes[j].resize(candidates_[j].size());
+    });
     // Chunks small enough to spread even a one-pair step over the threads;
     // each ray writes its own slot, so the split never changes a result.
     size_t rays = 0;
@@ -108,7 +110,7 @@ class CpuExecutor final : public RayExecutor {
     for_each_index(chunks_.size(), rays >= kParallelTraces, [&](size_t c) {
       const Chunk& chunk = chunks_[c];
       for (uint32_t k = chunk.begin; k < chunk.end; ++k)
-        outcomes[chunk.job][k] = trace(jobs[chunk.job], params_[chunk.job], candidates_[chunk.job][k]);
+        trace(jobs[chunk.job], params_[chunk.job], candidates_[chunk.job][k], outcomes[chunk.job][k]);
     });
   }
 
@@ -118,16 +120,16 @@ class CpuExecutor final : public RayExecutor {
   };
 
   // The job's candidate rays in the target's frame (rtcd_place_ray), in
-  // vertex order (full) or tracked order (iterative).
-  void select(const RayJob& job, std::vector<rtcd_candidate>& out) const {
-    out.clear();
+  // vertex order (full) or tracked order (iterative), handed to `take`.
+  template <class Take>
+  void for_each_candidate(const RayJob& job, const Take& take) const {
     if (job.overlap.empty()) return;
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
     auto consider = [&](uint32_t vertex, int32_t start, int32_t entry) {
       rtcd_candidate c{vertex, start, entry, 0, {}, {}};
       if (rtcd_place_ray(&frame, to_kernel(rs.origins[vertex]), to_kernel(rs.directions[vertex]), &c.origin, &c.direction))
-        out.push_back(c);
+        take(c);
     };
     if (job.iterative) {
       for (const TrackedRay& r : job.tracked) consider(r.vertex, r.triangle, r.entry);
@@ -136,8 +138,7 @@ class CpuExecutor final : public RayExecutor {
     }
   }
 
-  RayOutcome trace(const RayJob& job, const rtcd_trace_params& params, const rtcd_candidate& c) const {
-    rtcd_outcome o;
+  void trace(const RayJob& job, const rtcd_trace_params& params, const rtcd_candidate& c, RayOutcome& o) const {
     rtcd_outcome_init(&o, c.vertex);
     const Shape& target = *shapes_[job.target];
     if (const Mesh* mesh = target.mesh()) {
@@ -157,7 +158,6 @@ class CpuExecutor final : public RayExecutor {
         rtcd_volume_trace(RTCD_TARGET_HALFSPACE, 0.0f, rtcd_v3(0, 0, 0), &params, &c, &o);
       }
     }
-    return to_ray_outcome(o);
   }
 
   std::unique_ptr<MeshTracerFactory> factory_;
@@ -201,21 +201,6 @@ rtcd_frame make_frame(const RayJob& job) {
     f.hi[i] = job.overlap.max[i];
   }
   return f;
-}
-
-RayOutcome to_ray_outcome(const rtcd_outcome& o) {
-  RayOutcome r;
-  r.vertex = o.vertex;
-  r.triangle = o.triangle;
-  r.entry = o.entry;
-  r.t = o.t;
-  r.walk_steps = o.walk_steps;
-  r.kind = o.kind;
-  r.status = o.status;
-  r.predictive_cast = o.predictive_cast;
-  r.nearest_query = o.nearest_query;
-  r.retraced = o.retraced;
-  return r;
 }
 
 }  // namespace rtcd

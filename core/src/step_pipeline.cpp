@@ -28,7 +28,7 @@ std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) 
 constexpr size_t kParallelCount = 16384;
 // Least pairs worth placing (transforms and boxes) on several threads.
 constexpr size_t kParallelPairs = 1024;
-constexpr size_t kParallelFill = 4096;
+constexpr size_t kParallelFill = 1024;
 
 // A shape as the host builds records from it: what the refinement and the
 // records need, converted to double once instead of at every ray.

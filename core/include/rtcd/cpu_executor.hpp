@@ -40,9 +40,8 @@ std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory
 
 // What every executor derives from a job the same way, for the per-ray code
 // of kernel/trace.h: the per-ray parameters, the transform and candidate box
-// for rtcd_place_ray, and the outcome as the pipeline reads it.
+// for rtcd_place_ray.
 rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, const Config& config);
 rtcd_frame make_frame(const RayJob& job);
-RayOutcome to_ray_outcome(const rtcd_outcome& o);
 
 }  // namespace rtcd

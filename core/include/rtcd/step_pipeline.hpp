@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/kernel/tracer.h"
 #include "rtcd/limits.hpp"
 #include "rtcd/narrow_phase.hpp"
 
@@ -41,20 +42,10 @@ struct RayJob {
   std::span<const TrackedRay> tracked;
 };
 
-// What one candidate ray found. `t` is the kernel's float distance; the host
-// refines reported rays in double.
-struct RayOutcome {
-  uint32_t vertex = 0;
-  int32_t triangle = -1;
-  int32_t entry = -1;  // see TrackedRay
-  float t = 0.0f;
-  uint32_t walk_steps = 0;   // iterative rays: triangles the walk located
-  uint8_t kind = 0;             // rtcd_ray_kind; WATCHED is tracked but not reported
-  uint8_t status = 0;           // rtcd_line_status (iterative rays and volumes)
-  uint8_t predictive_cast = 0;  // an outward ray was traced too (predictive, or a re-traced hit's entry face)
-  uint8_t nearest_query = 0;    // a nearest-triangle query was made (neither ray met the target)
-  uint8_t retraced = 0;         // iterative: the walks could not be trusted (rtcd_walked_kind), traced again
-};
+// What one candidate ray found: the kernel's record (kernel/tracer.h), so
+// executors write it where the rays run and the host reads it as it is. `t`
+// is the kernel's float distance; the host refines reported rays in double.
+using RayOutcome = rtcd_outcome;
 
 class RayExecutor {
  public:

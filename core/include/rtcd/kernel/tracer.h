@@ -28,18 +28,18 @@ typedef struct {
   rtcd_vec3 direction;
 } rtcd_candidate;
 
-/* What one candidate ray found: the fields of rtcd::RayOutcome. */
+/* What one candidate ray found (rtcd::RayOutcome on the host). */
 typedef struct {
   rtcd_uint vertex;
-  rtcd_int triangle;
-  rtcd_int entry;
-  float t;
-  rtcd_uint walk_steps;
-  rtcd_uchar kind;
-  rtcd_uchar status;
-  rtcd_uchar predictive_cast;
-  rtcd_uchar nearest_query;
-  rtcd_uchar retraced;
+  rtcd_int triangle;        /* the face it leaves through, or where the next walk starts; -1: none */
+  rtcd_int entry;           /* penetrating rays: the face the line entered through behind the vertex; -1 unknown */
+  float t;                  /* float distance along the ray (negative: predictive) */
+  rtcd_uint walk_steps;     /* iterative rays: triangles the walks located */
+  rtcd_uchar kind;          /* an rtcd_ray_kind; WATCHED is tracked but not reported */
+  rtcd_uchar status;        /* an rtcd_line_status (iterative rays and volumes) */
+  rtcd_uchar predictive_cast; /* an outward ray was traced too */
+  rtcd_uchar nearest_query; /* a nearest-triangle query was made */
+  rtcd_uchar retraced;      /* iterative: the walks could not be trusted (rtcd_walked_kind), traced again */
 } rtcd_outcome;
 
 /* One job's parameters, the same for all of its rays. */
