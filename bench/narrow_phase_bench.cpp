@@ -115,7 +115,9 @@ int main(int argc, char** argv) {
   if (opencl_usable()) {
     for (const auto& [name, variant, mode] : {std::tuple{"opencl_full_basic", "opencl-basic", Mode::full},
                                               std::tuple{"opencl_full_bvh", "opencl", Mode::full},
-                                              std::tuple{"opencl_iterative", "opencl", Mode::iterative}})
+                                              std::tuple{"opencl_iterative", "opencl", Mode::iterative},
+                                              std::tuple{"opencl_grid_full_bvh", "opencl:layout=grid", Mode::full},
+                                              std::tuple{"opencl_compact_iterative", "opencl:layout=compact", Mode::iterative}})
       benchmark::RegisterBenchmark(name, opencl, std::string(variant), mode)
           ->Args({1, 1})
           ->Args({64, 1})

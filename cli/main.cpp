@@ -102,7 +102,7 @@ int main(int argc, char** argv) {
   query->add_option("--pose-a", q.pose_a, "Pose of A: \"tx ty tz qw qx qy qz\" (default identity)");
   query->add_option("--pose-b", q.pose_b, "Pose of B: \"tx ty tz qw qx qy qz\" (default identity)");
   query->add_option("--sequence", q.sequence, "JSON array of {\"pose_a\": [7], \"pose_b\": [7]} steps");
-  query->add_option("--backend", q.backend, "basic, embree, opencl, opencl-basic (then :gpu, :cpu, :devices=0,1) or auto");
+  query->add_option("--backend", q.backend, "basic, embree, opencl, opencl-basic (then :gpu, :cpu, :devices=0,1, :layout=grid|compact) or auto");
   query->add_option("--mode", q.mode, "full, iterative or auto");
   rtcd::cli::add_knobs(*query, q.knobs);
   query->add_option("--sampling", q.sampling, "Extra ray origins per unit area on sphere and box sources");

@@ -127,22 +127,16 @@ __kernel void rtcd_scatter(__global const rtcd_uint* first_items, __global const
 }
 
 /* One candidate ray: its full trace, or its walks (trace.h). */
-__kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
-                         __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
-                         __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                         __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
-                         __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
-                         rtcd_uint ray_count, __global rtcd_outcome* outcomes) {
-  rtcd_uint i = get_global_id(0);
-  rtcd_candidate c;
-  rtcd_trace_params p;
-  rtcd_device_shape shape;
+RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global const rtcd_device_job* jobs,
+                                              __global const rtcd_device_shape* shapes,
+                                              __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
+                                              __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
+                                              __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
+                                              __global const rtcd_uint* primitives) {
+  rtcd_trace_params p = jobs[c->job].params;
+  rtcd_device_shape shape = shapes[jobs[c->job].target];
   rtcd_outcome o;
-  if (i >= ray_count) return;
-  c = rays[i];
-  p = jobs[c.job].params;
-  shape = shapes[jobs[c.job].target];
-  rtcd_outcome_init(&o, c.vertex);
+  rtcd_outcome_init(&o, c->vertex);
   if (shape.kind == RTCD_TARGET_MESH) {
     rtcd_tracer t;
     t.positions = positions + shape.first_vertex;
@@ -154,10 +148,42 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
     t.primitives = primitives + shape.first_primitive;
     t.triangle_count = shape.triangle_count;
     t.node_count = shape.node_count;
-    if (p.iterative) rtcd_walk_trace(&t, &p, &c, &o);
-    else rtcd_full_trace(&t, &p, &c, 0, &o);
+    if (p.iterative) rtcd_walk_trace(&t, &p, c, &o);
+    else rtcd_full_trace(&t, &p, c, 0, &o);
   } else {
-    rtcd_volume_trace(shape.kind, shape.radius, shape.half_extents, &p, &c, &o);
+    rtcd_volume_trace(shape.kind, shape.radius, shape.half_extents, &p, c, &o);
   }
-  outcomes[i] = o;
+  return o;
+}
+
+/* Compacted layout: one work-item per candidate ray of the batch's list. */
+__kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
+                         __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
+                         __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
+                         __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
+                         __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
+                         rtcd_uint ray_count, __global rtcd_outcome* outcomes) {
+  rtcd_uint i = get_global_id(0);
+  rtcd_candidate c;
+  if (i >= ray_count) return;
+  c = rays[i];
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, nodes,
+                                     primitives);
+}
+
+/* Grid layout (Figure 2.6): one work-item per item, a candidate or not, in
+ * place; the host keeps the flagged ones. */
+__kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
+                               __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
+                               __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
+                               __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
+                               __global const rtcd_uint* primitives, __global const rtcd_candidate* staging,
+                               rtcd_uint item_count, __global const rtcd_uchar* flags,
+                               __global rtcd_outcome* outcomes) {
+  rtcd_uint i = get_global_id(0);
+  rtcd_candidate c;
+  if (i >= item_count || !flags[i]) return;
+  c = staging[i];
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, nodes,
+                                     primitives);
 }

@@ -73,8 +73,18 @@ class NameError : public BackendError {
   using BackendError::BackendError;
 };
 
+// How a batch's rays are laid out on the device. Compacted: a prefix sum
+// over each job's candidate flags, then one work-item per candidate (two
+// round trips: the counts, then the outcomes). Grid (Figure 2.6): one
+// work-item per item, candidate or not, traced in place (one round trip,
+// every item's outcome read back). By mode: grid for iterative batches,
+// whose items are last step's rays and nearly all candidates; compacted for
+// full ones, where most vertices are not (docs/results/opencl.md measures both).
+enum class Layout { by_mode, grid, compact };
+
 struct Selection {
   bool bvh = true;
+  Layout layout = Layout::by_mode;
   cl_device_type type = CL_DEVICE_TYPE_ALL;
   std::vector<size_t> indices;  // empty: every device
 };
@@ -90,7 +100,7 @@ Selection parse_name(const std::string& name) {
   }
   auto bad = [&](const std::string& why) {
     return NameError("backend '" + name + "': " + why +
-                     " (expected opencl or opencl-basic, then :gpu, :cpu or :devices=0,1)");
+                     " (expected opencl or opencl-basic, then :gpu, :cpu, :devices=0,1, :layout=grid or :layout=compact)");
   };
   if (!is_opencl_name(name)) throw bad("not an OpenCL backend name");
   while (!rest.empty()) {
@@ -102,6 +112,8 @@ Selection parse_name(const std::string& name) {
       s.type = CL_DEVICE_TYPE_GPU;
     } else if (option == "cpu") {
       s.type = CL_DEVICE_TYPE_CPU;
+    } else if (option == "layout=grid" || option == "layout=compact") {
+      s.layout = option == "layout=grid" ? Layout::grid : Layout::compact;
     } else if (option.rfind("devices=", 0) == 0) {
       std::stringstream list(option.substr(8));
       std::string item;
@@ -306,7 +318,7 @@ struct GrowingBuffer {
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel select, count, scatter, trace;
+  cl::Kernel select, count, scatter, trace, trace_items;
   // Shape data, in ShapeData's order.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
@@ -319,6 +331,7 @@ struct Device {
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
   std::vector<rtcd_outcome> host_outcomes;
+  std::vector<rtcd_uchar> host_flags;  // grid layout
   uint32_t items = 0, ray_count = 0;
   size_t load = 0;
   size_t group_size = 1;
@@ -328,8 +341,13 @@ struct Device {
 class OpenClExecutor final : public RayExecutor {
  public:
   OpenClExecutor(std::string name, std::shared_ptr<const Runtime> runtime, std::string setup_fault, bool bvh,
-                 OpenClFault fault, CpuFallback fallback)
-      : name_(std::move(name)), runtime_(std::move(runtime)), bvh_(bvh), fault_(fault), fallback_(std::move(fallback)) {
+                 Layout layout, OpenClFault fault, CpuFallback fallback)
+      : name_(std::move(name)),
+        runtime_(std::move(runtime)),
+        bvh_(bvh),
+        layout_(layout),
+        fault_(fault),
+        fallback_(std::move(fallback)) {
     if (!setup_fault.empty()) {
       fail(setup_fault);
       return;
@@ -342,8 +360,9 @@ class OpenClExecutor final : public RayExecutor {
         device.count = cl::Kernel(runtime_->program, "rtcd_count");
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
+        device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
         device.group_size = kGroupSize;
-        for (const cl::Kernel* k : {&device.select, &device.count, &device.scatter, &device.trace})
+        for (const cl::Kernel* k : {&device.select, &device.count, &device.scatter, &device.trace, &device.trace_items})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
@@ -537,6 +556,42 @@ class OpenClExecutor final : public RayExecutor {
     d.queue.flush();
   }
 
+  // The pipeline never mixes modes in a batch.
+  bool grid(const Device& d) const {
+    return layout_ == Layout::grid || (layout_ == Layout::by_mode && d.host_jobs.front().params.iterative);
+  }
+
+  // The grid layout, after rtcd_select: every item traced in place (the
+  // non-candidates return at once), flags and outcomes back in one read,
+  // the candidates' outcomes kept in item order, which is ray order.
+  void trace_in_place(Device& d) {
+    reserve(d.outcomes, d.items * sizeof(rtcd_outcome));
+    d.host_outcomes.resize(d.items);
+    d.host_flags.resize(d.items);
+    cl::Kernel& k = d.trace_items;
+    for (int i = 0; i < 8; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);  // table .. primitives
+    k.setArg(0, d.jobs.buffer);
+    k.setArg(9, d.staging.buffer);
+    k.setArg(10, rtcd_uint(d.items));
+    k.setArg(11, d.flags.buffer);
+    k.setArg(12, d.outcomes.buffer);
+    launch(d, k, d.items);
+    d.queue.enqueueReadBuffer(d.flags.buffer, CL_FALSE, 0, d.items, d.host_flags.data());
+    d.queue.enqueueReadBuffer(d.outcomes.buffer, CL_FALSE, 0, d.items * sizeof(rtcd_outcome), d.host_outcomes.data(),
+                              nullptr, &d.outcomes_read);
+    d.queue.flush();
+    d.outcomes_read.wait();
+    uint32_t n = 0;
+    for (size_t l = 0; l < d.host_jobs.size(); ++l) {
+      const rtcd_device_job& job = d.host_jobs[l];
+      const uint32_t first = n;
+      for (uint32_t i = job.first_item; i < job.first_item + job.item_count; ++i)
+        if (d.host_flags[i]) d.host_outcomes[n++] = d.host_outcomes[i];
+      d.host_counts[l] = n - first;
+    }
+    first_rays(d);
+  }
+
   // Phase 1, on the device: candidates placed and flagged, counted per job;
   // the counts come back.
   void place_on_device(Device& d) {
@@ -562,6 +617,7 @@ class OpenClExecutor final : public RayExecutor {
     s.setArg(9, d.flags.buffer);
     s.setArg(10, d.staging.buffer);
     launch(d, s, d.items);
+    if (grid(d)) return;  // every item is traced in place: nothing to count
     cl::Kernel& c = d.count;
     c.setArg(0, d.jobs.buffer);
     c.setArg(1, jobs_count);
@@ -590,6 +646,10 @@ class OpenClExecutor final : public RayExecutor {
       place_on_device(d);
     }
     if (inject_mid_step) throw cl::Error(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel (injected fault)");
+    if (grid(d) && runtime_->place_on_device) {
+      trace_in_place(d);
+      return;
+    }
     // Phase 2: compaction and tracing; the outcomes come back.
     if (runtime_->place_on_device) d.counts_read.wait();
     first_rays(d);
@@ -648,6 +708,7 @@ class OpenClExecutor final : public RayExecutor {
   std::string name_;
   std::shared_ptr<const Runtime> runtime_;
   bool bvh_;
+  Layout layout_;
   OpenClFault fault_;
   CpuFallback fallback_;
   std::string fault_message_;  // set once the devices are given up
@@ -687,7 +748,7 @@ std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const std::string& name, c
     setup_fault = describe(e);
   }
   if (!setup_fault.empty()) devices = {"cpu fallback (" + fallback.name + "): " + setup_fault};
-  auto executor = std::make_unique<OpenClExecutor>(name, std::move(runtime), setup_fault, selection.bvh, fault,
+  auto executor = std::make_unique<OpenClExecutor>(name, std::move(runtime), setup_fault, selection.bvh, selection.layout, fault,
                                                    std::move(fallback));
   return make_pipeline_narrow_phase(name, std::move(devices), std::move(executor), config);
 }

@@ -141,6 +141,7 @@ TEST(OpenCl, BadNamesAreBackendErrors) {
   EXPECT_THROW(make_narrow_phase("opencl:devices=0,0"), BackendError);
   EXPECT_THROW(make_narrow_phase("opencl:devices="), BackendError);
   EXPECT_THROW(make_narrow_phase("opencl:fast"), BackendError);
+  EXPECT_THROW(make_narrow_phase("opencl:layout=padded"), BackendError);
   EXPECT_THROW(make_narrow_phase("openclx"), BackendError);
   bool embree = false;
   for (const BackendInfo& b : available_backends()) embree = embree || (b.name == "embree" && b.usable);
@@ -240,6 +241,21 @@ TEST(OpenCl, TwoDevicesEqualOne) {
     const Scene scene{"concave", mode, 24, 4};
     const size_t reported = expect_same_run(run_scene("opencl", scene), run_scene("opencl:devices=1", scene));
     EXPECT_GT(reported, 0u);
+  }
+}
+
+// Both layouts (by default grid for iterative batches, compacted for full
+// ones) trace the same rays in the same order, on BVH and brute force.
+TEST(OpenCl, LayoutsAgree) {
+  for (Mode mode : {Mode::full, Mode::automatic}) {
+    const Scene scene{"concave", mode, 24, 4};
+    const auto by_mode = run_scene("opencl", scene);
+    EXPECT_GT(expect_same_run(run_scene("opencl:layout=grid", scene), by_mode), 0u);
+    EXPECT_GT(expect_same_run(run_scene("opencl:layout=compact", scene), by_mode), 0u);
+  }
+  for (Mode mode : {Mode::full, Mode::iterative}) {
+    const Scene scene{"primitives", mode, 24, 4};
+    EXPECT_GT(expect_same_run(run_scene("opencl-basic:layout=grid:devices=0", scene), run_scene("basic", scene)), 0u);
   }
 }
 
