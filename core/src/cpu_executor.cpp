@@ -133,9 +133,17 @@ class CpuExecutor final : public RayExecutor {
     };
     if (job.iterative) {
       for (const TrackedRay& r : job.tracked) consider(r.vertex, r.triangle, r.entry);
-    } else {
-      for (uint32_t v = 0; v < rs.origins.size(); ++v) consider(v, -1, -1);
+      return;
     }
+    // Most of a body's vertices lie far from the candidate box: the box seen
+    // from the source's frame, grown well past rounding, turns them away
+    // with six comparisons before the exact placement decides.
+    const Eigen::Matrix3d back = job.rotation.transpose();
+    const double scale = 1.0 + job.translation.norm() + job.overlap.min.cwiseAbs().maxCoeff() +
+                         job.overlap.max.cwiseAbs().maxCoeff();
+    const Aabb near = job.overlap.transformed(back, -(back * job.translation)).grown(1e-9 * scale);
+    for (uint32_t v = 0; v < rs.origins.size(); ++v)
+      if (near.contains(rs.origins[v].cast<double>())) consider(v, -1, -1);
   }
 
   void trace(const RayJob& job, const rtcd_trace_params& params, const rtcd_candidate& c, RayOutcome& o) const {
