@@ -551,7 +551,8 @@ std::string run_bench(const BenchOptions& o) {
       const ReplayRun& full = run_of("full " + tracer);
       const ReplayRun& autom = run_of("auto " + tracer);
       const uint64_t end = std::min({steps, full.stopped_at, autom.stopped_at});
-      const uint64_t begin = end - std::max<uint64_t>(1, steps / 10);
+      if (end == 0) continue;
+      const uint64_t begin = end - std::min(end, std::max<uint64_t>(1, steps / 10));  // a run stopped early: from 0
       const double f = stats(full, begin, end, rays_of).mean;
       const double a = stats(autom, begin, end, rays_of).mean;
       t.rows.push_back({tracer, "[" + std::to_string(begin) + ", " + std::to_string(end) + ")",
