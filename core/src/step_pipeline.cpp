@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <chrono>
-#include <unordered_map>
 
 #include "parallel.hpp"
 #include "rtcd/criterion.hpp"
@@ -144,9 +143,16 @@ class PipelineNarrowPhase final : public NarrowPhase {
 
   void remove_body(BodyId body) override {
     body_at(body).alive = false;
-    std::erase_if(states_, [body](const auto& kv) {
-      return BodyId(kv.first >> 32) == body || BodyId(kv.first & 0xffffffffu) == body;
-    });
+    size_t kept = 0;
+    for (size_t k = 0; k < state_keys_.size(); ++k) {
+      const uint64_t key = state_keys_[k];
+      if (BodyId(key >> 32) == body || BodyId(key & 0xffffffffu) == body) continue;
+      state_keys_[kept] = key;
+      if (kept != k) states_[kept] = std::move(states_[k]);
+      ++kept;
+    }
+    state_keys_.resize(kept);
+    states_.resize(kept);
   }
 
   void set_pose(BodyId body, const Pose& pose) override { body_at(body).pose = checked(pose); }
@@ -165,7 +171,6 @@ class PipelineNarrowPhase final : public NarrowPhase {
   struct PairState {
     Pose relative_at_full;               // lower id's frame in the higher id's frame
     std::vector<TrackedRay> tracked[2];  // [0]: lower id's rays into the higher, [1]: the reverse
-    uint64_t step = 0;                   // last step the pair was asked for
   };
   // A pair's step: its state and limits, and where its two jobs are:
   // jobs_[list][first] (a's rays), [first + 1] (b's).
@@ -195,10 +200,14 @@ class PipelineNarrowPhase final : public NarrowPhase {
   bool derive_;  // some limit follows the scene: shapes are measured, motions tracked
   std::vector<ShapeEntry> shapes_;
   std::vector<Body> bodies_;
-  std::unordered_map<uint64_t, PairState> states_;
+  // Pair states by key, ascending: each step merges them with the step's
+  // sorted keys in one sequential pass (a hash map's scattered nodes cost
+  // a cache miss per pair), into the other buffer of each pair.
+  std::vector<uint64_t> state_keys_, next_keys_;
+  std::vector<PairState> states_, next_states_;
   uint64_t step_ = 0;
   // Per-step buffers, kept across steps. Lists: [0] full jobs, [1] iterative.
-  std::vector<uint64_t> keys_;
+  std::vector<std::pair<uint64_t, uint32_t>> keys_;  // the step's pair keys with their indices, ascending
   std::vector<RayJob> jobs_[2];
   std::vector<std::vector<RayOutcome>> outcomes_[2];
   std::vector<PairWork> work_;
@@ -210,12 +219,14 @@ void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
     body_at(p.a);
     body_at(p.b);
     if (p.a == p.b) throw UsageError(pair_text(p.a, p.b) + " is one body");
-    keys_.push_back(pair_key(p.a, p.b));
+    keys_.push_back({pair_key(p.a, p.b), uint32_t(keys_.size())});
   }
   std::sort(keys_.begin(), keys_.end());
-  const auto twice = std::adjacent_find(keys_.begin(), keys_.end());
+  const auto twice =
+      std::adjacent_find(keys_.begin(), keys_.end(), [](const auto& x, const auto& y) { return x.first == y.first; });
   if (twice != keys_.end())
-    throw UsageError(pair_text(BodyId(*twice >> 32), BodyId(*twice & 0xffffffffu)) + " appears twice in one step");
+    throw UsageError(pair_text(BodyId(twice->first >> 32), BodyId(twice->first & 0xffffffffu)) +
+                     " appears twice in one step");
 }
 
 void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& out) {
@@ -243,50 +254,67 @@ void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& ou
 // Pair state, limits, mode and both jobs per pair.
 void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& out) {
   ++step_;
-  jobs_[0].clear();
-  jobs_[1].clear();
   work_.resize(pairs.size());
   out.pairs.resize(pairs.size());
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    auto [it, fresh] = states_.try_emplace(pair_key(pairs[i].a, pairs[i].b));
-    it->second.step = step_;
-    work_[i].state = &it->second;
+  // The step's pairs take their states along, in key order; states of pairs
+  // absent from this step are left behind and dropped.
+  next_keys_.clear();
+  next_states_.clear();
+  size_t old = 0;
+  for (const auto& [key, i] : keys_) {
+    while (old < state_keys_.size() && state_keys_[old] < key) ++old;
+    const bool fresh = old == state_keys_.size() || state_keys_[old] != key;
+    next_keys_.push_back(key);
+    if (fresh) {
+      next_states_.emplace_back();
+    } else {
+      next_states_.push_back(std::move(states_[old++]));
+    }
     work_[i].fresh = fresh;
   }
-  std::erase_if(states_, [this](const auto& kv) { return kv.second.step != step_; });
+  std::swap(state_keys_, next_keys_);
+  std::swap(states_, next_states_);
+  for (size_t k = 0; k < keys_.size(); ++k) work_[keys_[k].second].state = &states_[k];
 
   // Limits and mode touch only the pair's own state: on several threads once
   // there are enough pairs.
-  for_each_index(pairs.size(), pairs.size() >= kParallelPairs, [&](size_t i) { decide(pairs[i], work_[i]); });
+  const bool parallel = pairs.size() >= kParallelPairs;
+  for_each_index(pairs.size(), parallel, [&](size_t i) { decide(pairs[i], work_[i]); });
 
+  // Each pair's place in its list, in input order.
+  uint32_t jobs[2] = {0, 0};
   for (size_t i = 0; i < pairs.size(); ++i) {
-    const BodyPair p = pairs[i];
     PairWork& w = work_[i];
     const bool iterative = w.list == 1;
     out.stats.fallbacks_to_full += !w.fresh && config_.mode == Mode::automatic && !iterative;
+    ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
+    w.first = jobs[w.list];
+    jobs[w.list] += 2;
+  }
+  jobs_[0].resize(jobs[0]);
+  jobs_[1].resize(jobs[1]);
+
+  // Both jobs of each pair, their transforms and candidate boxes:
+  // independent per pair, so on several threads once there are enough.
+  for_each_index(pairs.size(), parallel, [&](size_t i) {
+    const BodyPair p = pairs[i];
+    PairWork& w = work_[i];
+    const bool iterative = w.list == 1;
     PairResult& pr = out.pairs[i];
     pr = PairResult{};
     pr.pair = p;
     pr.mode = iterative ? PairMode::iterative : PairMode::full;
-    ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
-    w.first = uint32_t(jobs_[w.list].size());
     w.tally = {};
-    for (const BodyId source : {p.a, p.b}) {
-      RayJob& job = jobs_[w.list].emplace_back();
+    for (uint32_t k = 0; k < 2; ++k) {
+      const BodyId source = k == 0 ? p.a : p.b, target = k == 0 ? p.b : p.a;
+      RayJob& job = jobs_[w.list][w.first + k];
       job.source = bodies_[source].shape;
-      job.target = bodies_[source == p.a ? p.b : p.a].shape;
+      job.target = bodies_[target].shape;
       job.iterative = iterative;
       job.limits = w.limits;
       job.tracked = w.state->tracked[source == std::min(p.a, p.b) ? 0 : 1];
+      place(job, source, target);
     }
-  }
-
-  // Each job's transform and candidate box: independent per pair, so on
-  // several threads once there are enough pairs.
-  for_each_index(pairs.size(), pairs.size() >= kParallelPairs, [&](size_t i) {
-    const PairWork& w = work_[i];
-    place(jobs_[w.list][w.first], pairs[i].a, pairs[i].b);
-    place(jobs_[w.list][w.first + 1], pairs[i].b, pairs[i].a);
   });
 
   if (derive_) {
