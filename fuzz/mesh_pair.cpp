@@ -31,9 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
   // Named references, not a structured binding: lambdas below capture them.
   const std::shared_ptr<const Shape>&shape_a = input->shape_a, &shape_b = input->shape_b;
   const std::vector<Pose>&poses_a = input->poses_a, &poses_b = input->poses_b;
-  const Config& config = input->config;
   const int steps = input->steps;
-  if (const char* dir = std::getenv("RTCD_FUZZ_DUMP")) fuzz::dump(dir, *shape_a, *shape_b, poses_a, poses_b, config);
 
   // Length scale of the pair: tolerances below are relative to it.
   const double size = std::max(fuzz::size_of(*shape_a), fuzz::size_of(*shape_b));
@@ -42,18 +40,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
   // The CPU backends only: the OpenCL one has its own harness (fuzz/opencl.cpp)
   // with one context for the whole run.
   static const std::vector<std::string> backends = fuzz::cpu_backends();
-  std::vector<std::vector<StepResult>> results(backends.size());
-  for (size_t k = 0; k < backends.size(); ++k) {
-    auto narrow = make_narrow_phase(backends[k], config);
-    const ShapeId sa = narrow->add_shape(shape_a), sb = narrow->add_shape(shape_b);
-    const BodyPair pair{narrow->add_body(sa, poses_a[0]), narrow->add_body(sb, poses_b[0])};
-    for (int s = 0; s < steps; ++s) {
-      narrow->set_pose(pair.a, poses_a[s]);
-      narrow->set_pose(pair.b, poses_b[s]);
-      StepResult& out = results[k].emplace_back();
-      narrow->detect(std::span(&pair, 1), out);
-      fuzz::check_step(backends[k] + " step " + std::to_string(s), out, pair, *shape_a, *shape_b, config);
-      if (verbose) {
+  std::vector<std::vector<StepResult>> results;
+  for (const std::string& backend : backends) results.push_back(fuzz::run_pair_case(*input, backend));
+  if (verbose) {
+    for (size_t k = 0; k < backends.size(); ++k)
+      for (int s = 0; s < steps; ++s) {
+        const StepResult& out = results[k][s];
         std::fprintf(stderr, "%s step %d: %s, %zu contacts, %zu predictive\n", backends[k].c_str(), s,
                      to_string(out.pairs[0].mode), out.contacts.size(), out.predictive.size());
         for (const Contact& c : out.contacts) {
@@ -69,7 +61,6 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
                        fuzz::exit_distance_to_other_faces(c, target, target_pose));
         }
       }
-    }
   }
 
   // Full steps do not depend on earlier results, so backends must agree there.

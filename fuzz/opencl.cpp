@@ -67,26 +67,8 @@ void require_same(const StepResult& x, const StepResult& y, const std::string& w
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
   const auto input = fuzz::read_pair_case(data, length);
   if (!input) return 0;
-  const std::shared_ptr<const Shape>&shape_a = input->shape_a, &shape_b = input->shape_b;
-  const std::vector<Pose>&poses_a = input->poses_a, &poses_b = input->poses_b;
-  const Config& config = input->config;
-  const int steps = input->steps;
-  if (const char* dir = std::getenv("RTCD_FUZZ_DUMP")) fuzz::dump(dir, *shape_a, *shape_b, poses_a, poses_b, config);
-
-  const std::vector<std::string> backends = {"opencl-basic", "basic"};
-  std::vector<std::vector<StepResult>> results(backends.size());
-  for (size_t k = 0; k < backends.size(); ++k) {
-    auto narrow = make_narrow_phase(backends[k], config);
-    const ShapeId sa = narrow->add_shape(shape_a), sb = narrow->add_shape(shape_b);
-    const BodyPair pair{narrow->add_body(sa, poses_a[0]), narrow->add_body(sb, poses_b[0])};
-    for (int s = 0; s < steps; ++s) {
-      narrow->set_pose(pair.a, poses_a[s]);
-      narrow->set_pose(pair.b, poses_b[s]);
-      StepResult& out = results[k].emplace_back();
-      narrow->detect(std::span(&pair, 1), out);
-      fuzz::check_step(backends[k] + " step " + std::to_string(s), out, pair, *shape_a, *shape_b, config);
-    }
-  }
-  for (int s = 0; s < steps; ++s) require_same(results[0][s], results[1][s], "step " + std::to_string(s));
+  const std::vector<StepResult> device = fuzz::run_pair_case(*input, "opencl-basic");
+  const std::vector<StepResult> cpu = fuzz::run_pair_case(*input, "basic");
+  for (int s = 0; s < input->steps; ++s) require_same(device[s], cpu[s], "step " + std::to_string(s));
   return 0;
 }

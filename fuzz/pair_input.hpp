@@ -11,13 +11,17 @@
 #include <bit>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <memory>
 #include <optional>
+#include <span>
+#include <string>
 #include <vector>
 
 #include <fuzzer/FuzzedDataProvider.h>
 
+#include "invariants.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/narrow_phase.hpp"
@@ -166,6 +170,41 @@ struct PairCase {
   int steps = 0;
 };
 
+inline double size_of(const Shape& s) {
+  const Aabb& b = s.bounds();
+  return (b.max - b.min).norm();
+}
+
+// RTCD_FUZZ_DUMP=DIR writes the decoded case (meshes as OBJ, poses and
+// knobs as text) to look at a finding outside the fuzzer.
+inline void dump(const std::filesystem::path& dir, const Shape& a, const Shape& b, const std::vector<Pose>& poses_a,
+          const std::vector<Pose>& poses_b, const Config& c) {
+  std::filesystem::create_directories(dir);
+  std::FILE* f = std::fopen((dir / "case.txt").c_str(), "w");
+  if (f == nullptr) return;
+  for (const auto& [name, shape] : {std::pair{"a", &a}, std::pair{"b", &b}}) {
+    if (const Mesh* m = shape->mesh()) {
+      save_obj(*m, dir / (std::string(name) + ".obj"));
+      std::fprintf(f, "%s: mesh %s.obj (%zu zero-area kept)\n", name, name, size_t(m->report().zero_area_triangles));
+    } else if (const auto* s = std::get_if<Sphere>(&shape->geometry())) {
+      std::fprintf(f, "%s: sphere:%.17g (%zu origins)\n", name, s->radius, shape->sources().origins.size());
+    } else {
+      const Eigen::Vector3d h = std::get<Box>(shape->geometry()).half_extents;
+      std::fprintf(f, "%s: box:%.17g,%.17g,%.17g\n", name, h.x(), h.y(), h.z());
+    }
+  }
+  for (size_t s = 0; s < poses_a.size(); ++s)
+    for (const auto& [name, p] : {std::pair{"a", &poses_a[s]}, std::pair{"b", &poses_b[s]}})
+      std::fprintf(f, "step %zu pose %s: %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", s, name, p->position.x(),
+                   p->position.y(), p->position.z(), p->orientation.w(), p->orientation.x(), p->orientation.y(),
+                   p->orientation.z());
+  // -1: derived per pair.
+  std::fprintf(f, "mode %s max_walk_steps %lld distance_extension %.17g displacement_threshold %.17g predictive %d projected %d\n",
+               to_string(c.mode), c.max_walk_steps ? (long long)*c.max_walk_steps : -1LL,
+               c.distance_extension.value_or(-1.0), c.displacement_threshold.value_or(-1.0), c.predictive, c.projected);
+  std::fclose(f);
+}
+
 // Nothing when the input names an invalid body or pose (rejected by design).
 inline std::optional<PairCase> read_pair_case(const uint8_t* data, size_t length) {
   PairCase c;
@@ -205,42 +244,25 @@ inline std::optional<PairCase> read_pair_case(const uint8_t* data, size_t length
   c.poses_b = std::move(poses_b);
   c.config = config;
   c.steps = steps;
+  if (const char* dir = std::getenv("RTCD_FUZZ_DUMP")) dump(dir, *c.shape_a, *c.shape_b, c.poses_a, c.poses_b, c.config);
   return c;
 }
 
-inline double size_of(const Shape& s) {
-  const Aabb& b = s.bounds();
-  return (b.max - b.min).norm();
-}
-
-// RTCD_FUZZ_DUMP=DIR writes the decoded case (meshes as OBJ, poses and
-// knobs as text) to look at a finding outside the fuzzer.
-inline void dump(const std::filesystem::path& dir, const Shape& a, const Shape& b, const std::vector<Pose>& poses_a,
-          const std::vector<Pose>& poses_b, const Config& c) {
-  std::filesystem::create_directories(dir);
-  std::FILE* f = std::fopen((dir / "case.txt").c_str(), "w");
-  if (f == nullptr) return;
-  for (const auto& [name, shape] : {std::pair{"a", &a}, std::pair{"b", &b}}) {
-    if (const Mesh* m = shape->mesh()) {
-      save_obj(*m, dir / (std::string(name) + ".obj"));
-      std::fprintf(f, "%s: mesh %s.obj (%zu zero-area kept)\n", name, name, size_t(m->report().zero_area_triangles));
-    } else if (const auto* s = std::get_if<Sphere>(&shape->geometry())) {
-      std::fprintf(f, "%s: sphere:%.17g (%zu origins)\n", name, s->radius, shape->sources().origins.size());
-    } else {
-      const Eigen::Vector3d h = std::get<Box>(shape->geometry()).half_extents;
-      std::fprintf(f, "%s: box:%.17g,%.17g,%.17g\n", name, h.x(), h.y(), h.z());
-    }
+// The case stepped on one backend, every step held to check_step
+// (invariants.hpp).
+inline std::vector<StepResult> run_pair_case(const PairCase& c, const std::string& backend) {
+  std::vector<StepResult> results;
+  auto narrow = make_narrow_phase(backend, c.config);
+  const ShapeId sa = narrow->add_shape(c.shape_a), sb = narrow->add_shape(c.shape_b);
+  const BodyPair pair{narrow->add_body(sa, c.poses_a[0]), narrow->add_body(sb, c.poses_b[0])};
+  for (int s = 0; s < c.steps; ++s) {
+    narrow->set_pose(pair.a, c.poses_a[s]);
+    narrow->set_pose(pair.b, c.poses_b[s]);
+    StepResult& out = results.emplace_back();
+    narrow->detect(std::span(&pair, 1), out);
+    check_step(backend + " step " + std::to_string(s), out, pair, *c.shape_a, *c.shape_b, c.config);
   }
-  for (size_t s = 0; s < poses_a.size(); ++s)
-    for (const auto& [name, p] : {std::pair{"a", &poses_a[s]}, std::pair{"b", &poses_b[s]}})
-      std::fprintf(f, "step %zu pose %s: %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", s, name, p->position.x(),
-                   p->position.y(), p->position.z(), p->orientation.w(), p->orientation.x(), p->orientation.y(),
-                   p->orientation.z());
-  // -1: derived per pair.
-  std::fprintf(f, "mode %s max_walk_steps %lld distance_extension %.17g displacement_threshold %.17g predictive %d projected %d\n",
-               to_string(c.mode), c.max_walk_steps ? (long long)*c.max_walk_steps : -1LL,
-               c.distance_extension.value_or(-1.0), c.displacement_threshold.value_or(-1.0), c.predictive, c.projected);
-  std::fclose(f);
+  return results;
 }
 
 }  // namespace rtcd::fuzz

@@ -541,12 +541,18 @@ class OpenClExecutor final : public RayExecutor {
     d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + group - 1) / group * group), cl::NDRange(group));
   }
 
+  // The arguments both trace kernels open with: the jobs, then the shape
+  // data from the table to the BVH's triangle lists.
+  static void bind_jobs_and_shapes(Device& d, cl::Kernel& k) {
+    k.setArg(0, d.jobs.buffer);
+    for (int i = 0; i < 8; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);
+  }
+
   void enqueue_trace(Device& d) {
     reserve(d.outcomes, d.ray_count * sizeof(rtcd_outcome));
     d.host_outcomes.resize(d.ray_count);
     cl::Kernel& k = d.trace;
-    for (int i = 0; i < 8; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);  // table .. primitives
-    k.setArg(0, d.jobs.buffer);
+    bind_jobs_and_shapes(d, k);
     k.setArg(9, d.rays.buffer);
     k.setArg(10, rtcd_uint(d.ray_count));
     k.setArg(11, d.outcomes.buffer);
@@ -569,8 +575,7 @@ class OpenClExecutor final : public RayExecutor {
     d.host_outcomes.resize(d.items);
     d.host_flags.resize(d.items);
     cl::Kernel& k = d.trace_items;
-    for (int i = 0; i < 8; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);  // table .. primitives
-    k.setArg(0, d.jobs.buffer);
+    bind_jobs_and_shapes(d, k);
     k.setArg(9, d.staging.buffer);
     k.setArg(10, rtcd_uint(d.items));
     k.setArg(11, d.flags.buffer);
@@ -592,8 +597,8 @@ class OpenClExecutor final : public RayExecutor {
     first_rays(d);
   }
 
-  // Phase 1, on the device: candidates placed and flagged, counted per job;
-  // the counts come back.
+  // Phase 1, on the device: candidates placed and flagged; for the compacted
+  // layout also counted per job, and the counts come back.
   void place_on_device(Device& d) {
     const auto jobs_count = rtcd_uint(d.host_jobs.size());
     write(d, d.jobs, d.host_jobs);
@@ -602,8 +607,6 @@ class OpenClExecutor final : public RayExecutor {
     write(d, d.tracked, d.host_tracked);
     reserve(d.flags, d.items);
     reserve(d.staging, d.items * sizeof(rtcd_candidate));
-    reserve(d.slots, d.items * sizeof(rtcd_uint));
-    reserve(d.counts, jobs_count * sizeof(rtcd_uint));
     cl::Kernel& s = d.select;
     s.setArg(0, d.jobs.buffer);
     s.setArg(1, d.first_items.buffer);
@@ -618,6 +621,8 @@ class OpenClExecutor final : public RayExecutor {
     s.setArg(10, d.staging.buffer);
     launch(d, s, d.items);
     if (grid(d)) return;  // every item is traced in place: nothing to count
+    reserve(d.slots, d.items * sizeof(rtcd_uint));
+    reserve(d.counts, jobs_count * sizeof(rtcd_uint));
     cl::Kernel& c = d.count;
     c.setArg(0, d.jobs.buffer);
     c.setArg(1, jobs_count);
