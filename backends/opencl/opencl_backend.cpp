@@ -703,9 +703,12 @@ class OpenClExecutor final : public RayExecutor {
     for (Device& d : devices_) {
       for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
         std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
-        const uint32_t n = d.ray_count == 0 ? 0 : d.host_counts[l];
-        const rtcd_outcome* first = d.host_outcomes.data() + (n == 0 ? 0 : d.host_first_rays[l]);
-        out.assign(first, first + n);
+        if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out
+          out.clear();
+          continue;
+        }
+        const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
+        out.assign(first, first + d.host_counts[l]);
       }
     }
   }

@@ -56,10 +56,11 @@ float float_at_most(double x) {
   return double(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
 }
 
-// Most rays per parallel chunk, and the least rays worth handing to other threads:
-// a traced ray costs tens of walks, so full batches go parallel far sooner.
+// Most rays per parallel chunk; the least items (tracked rays to walk, or
+// source vertices to select from) worth spreading jobs over threads; the
+// least traced rays worth it (a traced ray costs tens of walks).
 constexpr size_t kChunk = 128;
-constexpr size_t kParallelWalks = 512;
+constexpr size_t kParallelItems = 512;
 constexpr size_t kParallelTraces = 64;
 
 class CpuExecutor final : public RayExecutor {
@@ -82,7 +83,7 @@ class CpuExecutor final : public RayExecutor {
     if (walks) {
       // Walks are short and even: one pass per job, each tracked ray placed
       // and walked at once.
-      for_each_index(jobs.size(), work >= kParallelWalks, [&](size_t j) {
+      for_each_index(jobs.size(), work >= kParallelItems, [&](size_t j) {
         params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
         outcomes[j].clear();
         for_each_candidate(jobs[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
@@ -91,7 +92,7 @@ class CpuExecutor final : public RayExecutor {
     }
     // Traced rays cost far more and vary: select per job, then spread the
     // batch's rays over threads in fixed chunks.
-    for_each_index(jobs.size(), work >= kParallelWalks, [&](size_t j) {
+    for_each_index(jobs.size(), work >= kParallelItems, [&](size_t j) {
       params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
       candidates_[j].clear();
       for_each_candidate(jobs[j], [&](const rtcd_candidate& c) { candidates_[j].push_back(c); });
