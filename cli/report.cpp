@@ -32,6 +32,8 @@ nlohmann::json stats_json(const StepStats& s) {
           {"nearest_queries", s.nearest_queries},
           {"rays_retraced", s.rays_retraced},
           {"rays_watched", s.rays_watched},
+          {"bytes_to_device", s.bytes_to_device},
+          {"bytes_from_device", s.bytes_from_device},
           {"seconds", {{"prepare", s.seconds_prepare},
                        {"full", s.seconds_full},
                        {"iterative", s.seconds_iterative},

@@ -187,3 +187,30 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
   outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, nodes,
                                      primitives);
 }
+
+/* One job: the rays it goes on tracking (every outcome but the dropped
+ * ones, in order) written where the next step's rtcd_select reads them, so
+ * they stay on the device. Grid layout: the job's items, flagged; compacted:
+ * its rays. */
+__kernel void rtcd_keep(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
+                        __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
+                        __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
+                        rtcd_uint kept_base, __global rtcd_tracked* kept) {
+  rtcd_uint j = get_global_id(0);
+  rtcd_uint first, n, k;
+  __global rtcd_tracked* out;
+  if (j >= job_count) return;
+  first = firsts[j];
+  n = grid ? jobs[j].item_count : counts[j];
+  out = kept + kept_base + first;
+  for (k = first; k < first + n; ++k) {
+    rtcd_outcome o;
+    if (grid && !flags[k]) continue;
+    o = outcomes[k];
+    if (o.kind == RTCD_RAY_DROPPED) continue;
+    out->vertex = o.vertex;
+    out->triangle = o.triangle;
+    out->entry = o.entry;
+    ++out;
+  }
+}

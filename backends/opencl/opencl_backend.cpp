@@ -1,7 +1,8 @@
 // The OpenCL executor. Shapes are copied to every device once (at the first
 // step after they are added); each step's pair-directions are spread over
-// the devices (least loaded by expected rays), each device with its own
-// queue, and all devices run at once:
+// the devices (a pair that walks stays on the device holding its tracked
+// rays; the others go to the least loaded by expected rays), each device
+// with its own queue, and all devices run at once:
 //   1. rtcd_select: every possible ray (source vertex, or tracked ray) placed
 //      in the target's frame in double and flagged when it is a candidate
 //      (the host places them when a device lacks fp64);
@@ -9,7 +10,9 @@
 //      form a compacted list in the CPU's order; the counts come back;
 //   3. rtcd_scatter and rtcd_trace: candidates to their places, then one
 //      work-item per ray running kernel/trace.h; the outcomes come back and
-//      are written into each job's slot, so the step is in job order.
+//      are written into each job's slot, so the step is in job order;
+//   4. rtcd_keep: the rays each job goes on tracking stay on the device for
+//      the next step's walks (only poses go up, outcomes come down).
 // Any fault (no platform, a failed build, out of memory, a device error)
 // is reported once and the step, and every later one, runs on the CPU
 // executor from the same jobs, so the result does not change.
@@ -318,11 +321,21 @@ struct GrowingBuffer {
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel select, count, scatter, trace, trace_items;
+  cl::Kernel select, count, scatter, trace, trace_items, keep;
   // Shape data, in ShapeData's order.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
-  GrowingBuffer jobs, first_items, frames, tracked, flags, staging, slots, counts, first_rays, rays, outcomes;
+  GrowingBuffer jobs, first_items, frames, flags, staging, slots, counts, first_rays, rays, outcomes;
+  // Tracked rays that stay on the device, by step parity: the step's
+  // batches append what they keep to one (rtcd_keep) while its walks read
+  // the other, written the step before, with the rays that came from
+  // elsewhere (the host's mirror) appended there.
+  GrowingBuffer kept[2];
+  uint32_t kept_used[2] = {0, 0};  // rays in each
+  uint32_t upload_base = 0;        // this batch's uploaded tracked rays in the read buffer
+  uint32_t kept_base = 0;          // this batch's kept rays in the written buffer
+  bool keeps = false;              // some job of the batch keeps a residence
+  Transfers moved;
   // This batch: the jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
@@ -361,8 +374,10 @@ class OpenClExecutor final : public RayExecutor {
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
         device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
+        device.keep = cl::Kernel(runtime_->program, "rtcd_keep");
         device.group_size = kGroupSize;
-        for (const cl::Kernel* k : {&device.select, &device.count, &device.scatter, &device.trace, &device.trace_items})
+        for (const cl::Kernel* k :
+             {&device.select, &device.count, &device.scatter, &device.trace, &device.trace_items, &device.keep})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
@@ -379,19 +394,23 @@ class OpenClExecutor final : public RayExecutor {
     shapes_.push_back(std::move(shape));
   }
 
-  void execute(std::span<const RayJob> jobs, const Config& config,
-               std::span<std::vector<RayOutcome>> outcomes) override {
+  void begin_step() override {
+    ++step_;
+    for (Device& d : devices_) d.kept_used[step_ % 2] = 0;
+  }
+
+  Transfers execute(std::span<const RayJob> jobs, const Config& config,
+                    std::span<std::vector<RayOutcome>> outcomes) override {
     if (fault_message_.empty()) {
       try {
-        run(jobs, config, outcomes);
-        return;
+        return run(jobs, config, outcomes);
       } catch (const cl::Error& e) {
         fail(describe(e) + " during a step");
       } catch (const Error& e) {
         fail(e.what());
       }
     }
-    cpu().execute(jobs, config, outcomes);
+    return cpu().execute(jobs, config, outcomes);
   }
 
  private:
@@ -450,10 +469,40 @@ class OpenClExecutor final : public RayExecutor {
     b.bytes = bytes;
   }
 
+  // Tracked rays to `count` in all, the first `used` kept (copied on the
+  // device when the buffer grows).
+  void reserve_tracked(Device& d, GrowingBuffer& b, size_t count, size_t used) {
+    if (std::max<size_t>(count * sizeof(rtcd_tracked), 64) <= b.bytes) return;
+    const cl::Buffer old = b.buffer;
+    reserve(b, count * sizeof(rtcd_tracked));
+    if (used > 0) d.queue.enqueueCopyBuffer(old, b.buffer, 0, 0, used * sizeof(rtcd_tracked));
+  }
+
+  // `v` into `b` from element `offset` on; `b` holds them already.
+  template <class T>
+  void write_at(Device& d, GrowingBuffer& b, const std::vector<T>& v, size_t offset) {
+    if (v.empty()) return;
+    d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, offset * sizeof(T), v.size() * sizeof(T), v.data());
+    d.moved.to_device += v.size() * sizeof(T);
+  }
+
   template <class T>
   void write(Device& d, GrowingBuffer& b, const std::vector<T>& v) {
     reserve(b, v.size() * sizeof(T));
-    if (!v.empty()) d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, 0, v.size() * sizeof(T), v.data());
+    write_at(d, b, v, 0);
+  }
+
+  template <class T>
+  void read(Device& d, const GrowingBuffer& b, std::vector<T>& v, cl::Event* done = nullptr) {
+    d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, 0, v.size() * sizeof(T), v.data(), nullptr, done);
+    d.moved.from_device += v.size() * sizeof(T);
+  }
+
+  // The job's tracked rays are on a device already: they were kept there
+  // the step before (the host's mirror holds the same rays).
+  bool resident(const RayJob& job) const {
+    return runtime_->place_on_device && job.iterative && job.residence && job.residence->step != 0 &&
+           job.residence->step + 1 == step_ && job.residence->place < devices_.size();
   }
 
   static size_t items_of(const RayJob& job, const Shape& source) {
@@ -461,7 +510,10 @@ class OpenClExecutor final : public RayExecutor {
     return job.iterative ? job.tracked.size() : source.sources().origins.size();
   }
 
-  // Each job to the device with the fewest expected rays so far.
+  // A job whose tracked rays are on a device walks there; every other job
+  // goes to the device with the fewest expected rays so far. So a pair
+  // stays where it is from one full step to the next, and may move to
+  // rebalance at a full step, when its rays are traced anew.
   void assign(std::span<const RayJob> jobs, const Config& config) {
     for (Device& d : devices_) {
       d.batch_jobs.clear();
@@ -472,30 +524,44 @@ class OpenClExecutor final : public RayExecutor {
       d.items = 0;
       d.ray_count = 0;
       d.load = 0;
+      d.upload_base = runtime_->place_on_device ? d.kept_used[(step_ + 1) % 2] : 0;
+      d.keeps = false;
+      d.moved = {};
     }
+    for (uint32_t j = 0; j < jobs.size(); ++j)
+      if (resident(jobs[j])) add(devices_[jobs[j].residence->place], j, jobs[j], config);
     for (uint32_t j = 0; j < jobs.size(); ++j) {
-      const RayJob& job = jobs[j];
-      Device& d = *std::min_element(devices_.begin(), devices_.end(),
-                                    [](const Device& a, const Device& b) { return a.load < b.load; });
-      const size_t items = items_of(job, *shapes_[job.source]);
-      rtcd_device_job dj{};
-      dj.params = make_trace_params(job, *shapes_[job.target], config);
-      dj.source = job.source;
-      dj.target = job.target;
-      dj.first_item = d.items;
-      dj.item_count = rtcd_uint(items);
-      dj.first_tracked = rtcd_uint(d.host_tracked.size());
+      if (resident(jobs[j])) continue;
+      add(*std::min_element(devices_.begin(), devices_.end(),
+                            [](const Device& a, const Device& b) { return a.load < b.load; }),
+          j, jobs[j], config);
+    }
+  }
+
+  void add(Device& d, uint32_t j, const RayJob& job, const Config& config) {
+    const size_t items = items_of(job, *shapes_[job.source]);
+    rtcd_device_job dj{};
+    dj.params = make_trace_params(job, *shapes_[job.target], config);
+    dj.source = job.source;
+    dj.target = job.target;
+    dj.first_item = d.items;
+    dj.item_count = rtcd_uint(items);
+    if (resident(job)) {
+      dj.first_tracked = job.residence->first;
+    } else {
+      dj.first_tracked = d.upload_base + rtcd_uint(d.host_tracked.size());
       if (job.iterative && items > 0) {
         const auto* tracked = reinterpret_cast<const rtcd_tracked*>(job.tracked.data());
         d.host_tracked.insert(d.host_tracked.end(), tracked, tracked + job.tracked.size());
       }
-      d.batch_jobs.push_back(j);
-      d.host_jobs.push_back(dj);
-      d.host_first_items.push_back(d.items);
-      d.host_frames.push_back(make_frame(job));
-      d.items += rtcd_uint(items);
-      d.load += items;
     }
+    d.batch_jobs.push_back(j);
+    d.host_jobs.push_back(dj);
+    d.host_first_items.push_back(d.items);
+    d.host_frames.push_back(make_frame(job));
+    d.items += rtcd_uint(items);
+    d.load += items;
+    d.keeps = d.keeps || job.residence;
   }
 
   // The host's placement, for devices without fp64: the same rtcd_place_ray.
@@ -557,9 +623,32 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(10, rtcd_uint(d.ray_count));
     k.setArg(11, d.outcomes.buffer);
     launch(d, k, d.ray_count);
-    d.queue.enqueueReadBuffer(d.outcomes.buffer, CL_FALSE, 0, d.ray_count * sizeof(rtcd_outcome),
-                              d.host_outcomes.data(), nullptr, &d.outcomes_read);
+    read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
+    if (runtime_->place_on_device) keep(d, d.first_rays, d.ray_count);
     d.queue.flush();
+  }
+
+  // rtcd_keep after the trace: the batch's tracked rays for the next step
+  // stay on the device, each job's at the place of its items (grid) or
+  // rays (compacted) past kept_base, which the residences record.
+  void keep(Device& d, const GrowingBuffer& firsts, uint32_t count) {
+    if (!d.keeps) return;
+    GrowingBuffer& kept = d.kept[step_ % 2];
+    uint32_t& used = d.kept_used[step_ % 2];
+    d.kept_base = used;
+    reserve_tracked(d, kept, size_t(used) + count, used);
+    used += count;
+    cl::Kernel& k = d.keep;
+    k.setArg(0, d.jobs.buffer);
+    k.setArg(1, rtcd_uint(d.host_jobs.size()));
+    k.setArg(2, rtcd_uint(grid(d)));
+    k.setArg(3, firsts.buffer);
+    k.setArg(4, grid(d) ? firsts.buffer : d.counts.buffer);
+    k.setArg(5, d.flags.buffer);
+    k.setArg(6, d.outcomes.buffer);
+    k.setArg(7, d.kept_base);
+    k.setArg(8, kept.buffer);
+    launch(d, k, d.host_jobs.size());
   }
 
   // The pipeline never mixes modes in a batch.
@@ -581,9 +670,9 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(11, d.flags.buffer);
     k.setArg(12, d.outcomes.buffer);
     launch(d, k, d.items);
-    d.queue.enqueueReadBuffer(d.flags.buffer, CL_FALSE, 0, d.items, d.host_flags.data());
-    d.queue.enqueueReadBuffer(d.outcomes.buffer, CL_FALSE, 0, d.items * sizeof(rtcd_outcome), d.host_outcomes.data(),
-                              nullptr, &d.outcomes_read);
+    read(d, d.flags, d.host_flags);
+    read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
+    keep(d, d.first_items, d.items);
     d.queue.flush();
     d.outcomes_read.wait();
     uint32_t n = 0;
@@ -604,7 +693,12 @@ class OpenClExecutor final : public RayExecutor {
     write(d, d.jobs, d.host_jobs);
     write(d, d.first_items, d.host_first_items);
     write(d, d.frames, d.host_frames);
-    write(d, d.tracked, d.host_tracked);
+    // Tracked rays that were not kept here come from the host's mirror,
+    // after the kept ones the walks read.
+    GrowingBuffer& tracked = d.kept[(step_ + 1) % 2];
+    reserve_tracked(d, tracked, size_t(d.upload_base) + d.host_tracked.size(), d.upload_base);
+    write_at(d, tracked, d.host_tracked, d.upload_base);
+    d.kept_used[(step_ + 1) % 2] = d.upload_base + rtcd_uint(d.host_tracked.size());
     reserve(d.flags, d.items);
     reserve(d.staging, d.items * sizeof(rtcd_candidate));
     cl::Kernel& s = d.select;
@@ -616,7 +710,7 @@ class OpenClExecutor final : public RayExecutor {
     s.setArg(5, d.shapes[0]);
     s.setArg(6, d.shapes[8]);
     s.setArg(7, d.shapes[9]);
-    s.setArg(8, d.tracked.buffer);
+    s.setArg(8, tracked.buffer);
     s.setArg(9, d.flags.buffer);
     s.setArg(10, d.staging.buffer);
     launch(d, s, d.items);
@@ -630,8 +724,7 @@ class OpenClExecutor final : public RayExecutor {
     c.setArg(3, d.slots.buffer);
     c.setArg(4, d.counts.buffer);
     launch(d, c, jobs_count);
-    d.queue.enqueueReadBuffer(d.counts.buffer, CL_FALSE, 0, jobs_count * sizeof(rtcd_uint), d.host_counts.data(),
-                              nullptr, &d.counts_read);
+    read(d, d.counts, d.host_counts, &d.counts_read);
     d.queue.flush();
   }
 
@@ -681,7 +774,7 @@ class OpenClExecutor final : public RayExecutor {
     d.outcomes_read.wait();
   }
 
-  void run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes) {
+  Transfers run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes) {
     assign(jobs, config);
     // The injected mid-step fault strikes the second batch with work, after
     // its first kernels were enqueued.
@@ -699,18 +792,28 @@ class OpenClExecutor final : public RayExecutor {
           },
           tbb::simple_partitioner());
     }
-    // Each job's outcomes into its own slot: the step keeps job order.
-    for (Device& d : devices_) {
+    // Each job's outcomes into its own slot: the step keeps job order. And
+    // where its kept rays are, for the next step.
+    Transfers moved;
+    for (uint32_t i = 0; i < devices_.size(); ++i) {
+      Device& d = devices_[i];
       for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
+        const RayJob& job = jobs[d.batch_jobs[l]];
         std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
-        if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out
+        if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
+          if (job.residence && runtime_->place_on_device) *job.residence = {step_, i, 0};
           out.clear();
           continue;
         }
+        if (job.residence && runtime_->place_on_device)
+          *job.residence = {step_, i, d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l])};
         const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
         out.assign(first, first + d.host_counts[l]);
       }
+      moved.to_device += d.moved.to_device;
+      moved.from_device += d.moved.from_device;
     }
+    return moved;
   }
 
   std::string name_;
@@ -725,6 +828,7 @@ class OpenClExecutor final : public RayExecutor {
   std::vector<Device> devices_;
   std::unique_ptr<RayExecutor> cpu_;
   uint64_t batches_ = 0;  // batches with rays
+  uint64_t step_ = 0;     // begin_step calls
 };
 
 }  // namespace

@@ -73,8 +73,8 @@ class CpuExecutor final : public RayExecutor {
     shapes_.push_back(std::move(shape));
   }
 
-  void execute(std::span<const RayJob> jobs, const Config& config,
-               std::span<std::vector<RayOutcome>> outcomes) override {
+  Transfers execute(std::span<const RayJob> jobs, const Config& config,
+                    std::span<std::vector<RayOutcome>> outcomes) override {
     if (candidates_.size() < jobs.size()) candidates_.resize(jobs.size());
     if (params_.size() < jobs.size()) params_.resize(jobs.size());
     size_t work = 0;
@@ -88,7 +88,7 @@ class CpuExecutor final : public RayExecutor {
         outcomes[j].clear();
         for_each_candidate(jobs[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
       });
-      return;
+      return {};  // the rays run where they are
     }
     // Traced rays cost far more and vary: select per job, then spread the
     // batch's rays over threads in fixed chunks.
@@ -113,6 +113,7 @@ class CpuExecutor final : public RayExecutor {
       for (uint32_t k = chunk.begin; k < chunk.end; ++k)
         trace(jobs[chunk.job], params_[chunk.job], candidates_[chunk.job][k], outcomes[chunk.job][k]);
     });
+    return {};
   }
 
  private:

@@ -171,6 +171,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   struct PairState {
     Pose relative_at_full;               // lower id's frame in the higher id's frame
     std::vector<TrackedRay> tracked[2];  // [0]: lower id's rays into the higher, [1]: the reverse
+    Residence residence[2];              // where the executor keeps them, in the same order
   };
   // A pair's step: its state and limits, and where its two jobs are:
   // jobs_[list][first] (a's rays), [first + 1] (b's).
@@ -242,9 +243,12 @@ void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& ou
   out.stats = {};
   prepare(pairs, out);
   out.stats.seconds_prepare = lap();
+  executor_->begin_step();
   for (uint32_t list : {0u, 1u}) {
     if (outcomes_[list].size() < jobs_[list].size()) outcomes_[list].resize(jobs_[list].size());
-    executor_->execute(jobs_[list], config_, outcomes_[list]);
+    const Transfers moved = executor_->execute(jobs_[list], config_, outcomes_[list]);
+    out.stats.bytes_to_device += moved.to_device;
+    out.stats.bytes_from_device += moved.from_device;
     (list == 1 ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
   }
   gather(pairs, out);
@@ -312,7 +316,9 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
       job.target = bodies_[target].shape;
       job.iterative = iterative;
       job.limits = w.limits;
-      job.tracked = w.state->tracked[source == std::min(p.a, p.b) ? 0 : 1];
+      const int direction = source == std::min(p.a, p.b) ? 0 : 1;
+      job.tracked = w.state->tracked[direction];
+      job.residence = &w.state->residence[direction];
       place(job, source, target);
     }
   });

@@ -517,7 +517,7 @@ std::string run_bench(const BenchOptions& o) {
     csv << std::setprecision(9)
         << "config,engine,threads,step,time,bodies,pairs,phase,seconds,seconds_rays,seconds_prepare,seconds_full,"
            "seconds_iterative,seconds_gather,pairs_full,pairs_iterative,rays,colliding,contacts,depth_sum,judged,deep,"
-           "missed\n";
+           "missed,bytes_to_device,bytes_from_device\n";
     for (const ReplayRun& r : runs)
       for (uint64_t i = 0; i < r.steps.size(); ++i) {
         const ReplayStep& s = r.steps[i];
@@ -528,7 +528,7 @@ std::string run_bench(const BenchOptions& o) {
             << ',' << s.seconds_prepare << ',' << s.seconds_full << ',' << s.seconds_iterative << ','
             << s.seconds_gather << ',' << s.pairs_full << ',' << s.pairs_iterative << ',' << s.rays << ','
             << s.colliding << ',' << s.contacts << ',' << s.depth_sum << ',' << s.judged << ',' << s.deep << ','
-            << s.missed << '\n';
+            << s.missed << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
       }
     std::ofstream host(dir / "host_steps.csv");
     host << std::setprecision(9) << "host,step,bodies,pairs,contacts,seconds_broad,seconds_narrow,seconds_solver,"

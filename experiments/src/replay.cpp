@@ -65,6 +65,8 @@ class OursRunner final : public Runner {
     out.pairs_full = s.pairs_full;
     out.pairs_iterative = s.pairs_iterative;
     out.rays = s.rays_full + s.rays_predictive + s.rays_iterative;
+    out.bytes_to_device = s.bytes_to_device;
+    out.bytes_from_device = s.bytes_from_device;
     out.contacts = result_.contacts.size();
     for (const PairResult& p : result_.pairs) out.colliding += p.colliding;
     for (const Contact& c : result_.contacts) out.depth_sum += c.depth;

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <random>
+#include <set>
 
 #include "opencl/bvh.hpp"
 #include "opencl/opencl_backend.hpp"
@@ -241,6 +242,24 @@ TEST(OpenCl, TwoDevicesEqualOne) {
     const Scene scene{"concave", mode, 24, 4};
     const size_t reported = expect_same_run(run_scene("opencl", scene), run_scene("opencl:devices=1", scene));
     EXPECT_GT(reported, 0u);
+  }
+}
+
+// A walking pair stays on the device that traced it and its tracked rays
+// stay there: an iterative step sends the same bytes (the jobs and their
+// poses) whatever number of rays it walks.
+TEST(OpenCl, TrackedRaysStayOnTheirDevice) {
+  for (const std::string backend : {"opencl", "opencl:devices=1"}) {
+    SCOPED_TRACE(backend);
+    const auto steps = run_scene(backend, {"concave", Mode::iterative, 16, 6});
+    std::set<size_t> walked;
+    for (size_t s = 1; s < steps.size(); ++s) {
+      EXPECT_EQ(steps[s].stats.pairs_iterative, 16u);
+      EXPECT_EQ(steps[s].stats.bytes_to_device, steps[1].stats.bytes_to_device) << "step " << s;
+      EXPECT_GT(steps[s].stats.bytes_from_device, 0u);
+      walked.insert(steps[s].stats.rays_iterative);
+    }
+    EXPECT_GT(walked.size(), 1u) << "every step walked as many rays: the test shows nothing";
   }
 }
 

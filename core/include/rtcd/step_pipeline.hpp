@@ -26,6 +26,16 @@ struct TrackedRay {
   int32_t entry;     // penetrating rays: the face the line enters through behind the vertex; -1 unknown
 };
 
+// Where an executor left a pair-direction's tracked rays after a step (on
+// the device that ran it, say), so the next step's walks run there without
+// sending them again. The executor's own note: the pipeline keeps it with
+// the pair's state and drops it with that state.
+struct Residence {
+  uint64_t step = 0;   // the executor's step (begin_step) that wrote it; 0: none
+  uint32_t place = 0;  // where, in the executor's numbering (a device)
+  uint32_t first = 0;  // the first of the rays there
+};
+
 // One direction of one pair: the source's rays against the target.
 struct RayJob {
   ShapeId source = 0, target = 0;
@@ -40,6 +50,14 @@ struct RayJob {
   PairLimits limits;
   // Iterative jobs: last step's rays, the walks' start triangles.
   std::span<const TrackedRay> tracked;
+  // The pair-direction's note for the executor, read and written by it;
+  // null: none is kept.
+  Residence* residence = nullptr;
+};
+
+// Bytes an executor moved between the host and where its rays run.
+struct Transfers {
+  size_t to_device = 0, from_device = 0;
 };
 
 // What one candidate ray found: the kernel's record (kernel/tracer.h), so
@@ -52,14 +70,17 @@ class RayExecutor {
   virtual ~RayExecutor() = default;
   // Called once per shape, in ShapeId order, before any job names it.
   virtual void add_shape(std::shared_ptr<const Shape> shape) = 0;
+  // Called before each step's batches: a residence is good for the step
+  // after the one that wrote it.
+  virtual void begin_step() {}
   // outcomes[j] receives job j's candidates in order: every origin with a
   // direction inside the overlap box (full jobs, by vertex), or every tracked
   // ray whose origin is inside it (iterative jobs, in tracked order); a ray
   // that reports nothing has kind RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when
   // it stays tracked (its `triangle` is where the next walk starts). The caller sizes
   // `outcomes` to at least jobs.size(); the executor only clears and fills.
-  virtual void execute(std::span<const RayJob> jobs, const Config& config,
-                       std::span<std::vector<RayOutcome>> outcomes) = 0;
+  virtual Transfers execute(std::span<const RayJob> jobs, const Config& config,
+                            std::span<std::vector<RayOutcome>> outcomes) = 0;
 };
 
 std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,
