@@ -60,7 +60,7 @@ Scene make_scene(const std::string& backend, Mode mode, int count) {
 void run(benchmark::State& state, const std::string& backend, Mode mode) {
   Scene s = make_scene(backend, mode, int(state.range(0)));
   s.narrow->detect(s.pairs);  // the first, full step
-  size_t rays = 0, steps = 0, contacts = 0, walk_steps = 0;
+  size_t rays = 0, steps = 0, contacts = 0, walk_steps = 0, up = 0, down = 0;
   double prepare = 0, trace = 0, gather = 0;
   StepResult r;  // reused: a host keeps its result buffers across steps
   for (auto _ : state) {
@@ -74,6 +74,8 @@ void run(benchmark::State& state, const std::string& backend, Mode mode) {
     rays += r.stats.rays_full + r.stats.rays_predictive + r.stats.rays_iterative;
     contacts += r.contacts.size();
     walk_steps += r.stats.walk_steps;
+    up += r.stats.bytes_to_device;
+    down += r.stats.bytes_from_device;
     prepare += r.stats.seconds_prepare;
     trace += r.stats.seconds_full + r.stats.seconds_iterative;
     gather += r.stats.seconds_gather;
@@ -87,6 +89,10 @@ void run(benchmark::State& state, const std::string& backend, Mode mode) {
   state.counters["gather us"] = 1e6 * gather / double(steps);
   state.counters["rays/step"] = double(rays) / double(steps);
   state.counters["contacts/step"] = double(contacts) / double(steps);
+  if (up + down > 0) {
+    state.counters["bytes up/step"] = double(up) / double(steps);
+    state.counters["bytes down/step"] = double(down) / double(steps);
+  }
   if (mode == Mode::iterative) state.counters["walk steps/ray"] = double(walk_steps) / double(rays);
 }
 
