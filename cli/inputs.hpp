@@ -18,6 +18,7 @@ namespace rtcd::cli {
 // The accuracy knobs every subcommand that runs the narrow phase takes.
 struct Knobs {
   bool no_predictive = false;
+  bool no_verify_walks = false;
   // Unset: derived per pair (rtcd/limits.hpp).
   std::optional<uint32_t> max_walk_steps;
   std::optional<double> displacement_threshold;

@@ -150,6 +150,7 @@ int run_scene(const RunOptions& o) {
         {"mode", to_string(scene.narrow.mode)},
         {"predictive", scene.narrow.predictive},
         {"projected", scene.narrow.projected},
+        {"verify_walks", scene.narrow.verify_walks},
         {"max_walk_steps", limit_json(scene.narrow.max_walk_steps)},
         {"displacement_threshold", limit_json(scene.narrow.displacement_threshold)},
         {"distance_extension", limit_json(scene.narrow.distance_extension)},

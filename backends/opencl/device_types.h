@@ -31,7 +31,6 @@ typedef struct {
   rtcd_uint first_item;
   rtcd_uint item_count;
   rtcd_uint first_tracked; /* iterative jobs: the job's tracked rays */
-  rtcd_uint padding;
 } rtcd_device_job;
 
 /* rtcd::TrackedRay. */

@@ -198,6 +198,7 @@ rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, cons
   p.max_walk_steps = job.limits.max_walk_steps;
   p.predictive = config.predictive;
   p.watch = watch;
+  p.verify = config.verify_walks;
   p.iterative = job.iterative;
   return p;
 }

@@ -311,6 +311,7 @@ Scene parse_scene(std::string_view json_text, const std::string& path, const Sce
     np.fail(np.key("displacement_threshold"), "must not exceed narrow_phase.distance_extension");
   s.narrow.predictive = s.has(Effect::predictive);
   s.narrow.projected = s.has(Effect::projected);
+  s.narrow.verify_walks = np.boolean("verify_walks", s.narrow.verify_walks);
   s.points_per_pair = uint32_t(np.integer("points_per_pair", s.points_per_pair, 1, 64));
   np.finish();
 

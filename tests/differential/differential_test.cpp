@@ -92,14 +92,10 @@ TEST_P(Differential, BoundsHold) {
     // rate); most judged steps still walk, so the bounds below judge walks.
     EXPECT_GE(s.iterative_pairs, s.pairs / 2) << "most judged steps must walk";
     EXPECT_LE(s.missed_rate(), 0.005) << s.missed << " of " << s.deep << " deep origins missed";
-    // A walk cannot see a concavity's gap open between the faces it tracks
-    // (docs/ARCHITECTURE.md): a few false rays in a million, never more.
-    EXPECT_LE(double(s.false_rays), 1e-5 * double(s.far_outside)) << "of " << s.far_outside << " origins outside";
-    for (const PairMetrics& m : r.pairs)
-      if (m.false_rays > 0) {
-        std::cout << "first pair with a false ray:\n" << describe(family, m, o) << '\n';
-        break;
-      }
+    // A walked contact is checked back to its entry face (verify_walks), so
+    // a vertex in a concave target's fold is not reported.
+    EXPECT_EQ(s.false_rays, 0u) << "of " << s.far_outside << " origins outside";
+    report_first(family, r, o, [](const PairMetrics& m) { return m.false_rays > 0; }, "false ray");
   }
   if (o.with_oracles) {
     // FCL sees every pair with a deep vertex, except one body wholly inside

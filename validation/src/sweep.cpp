@@ -35,6 +35,7 @@ std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, 
     settings.push_back({"distance_extension", text(e), RunMode::iterative,
                         [e](Config& c) { c.distance_extension = e; }});
   settings.push_back({"predictive", "off", RunMode::iterative, [](Config& c) { c.predictive = false; }});
+  settings.push_back({"verify_walks", "off", RunMode::iterative, [](Config& c) { c.verify_walks = false; }});
 
   std::vector<SweepPoint> points;
   for (const Setting& s : settings) {

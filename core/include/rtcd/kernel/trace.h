@@ -105,6 +105,18 @@ RTCD_INLINE void rtcd_walk_trace(const rtcd_tracer* tracer, const rtcd_trace_par
    * iterative/64) for no missed ray in the validation. */
   kind = rtcd_walked_kind(exit_walk.status, exit_walk.t, entry_walk.status, entry_walk.t, p->predictive, p->watch, 0,
                           p->extension);
+  /* The walks see the crossings they track, not a fold of the target
+   * between them: a vertex that moved out into a gap between its entry and
+   * exit faces would still read as inside. One bounded cast back to the
+   * entry tells: a face the line leaves through there means the vertex is
+   * outside, and the ray is traced again. */
+  if (kind == RTCD_RAY_PENETRATING && p->verify) {
+    rtcd_ray back = rtcd_make_ray(c->origin, rtcd_neg(c->direction));
+    rtcd_hit fold = rtcd_tracer_first_hit(tracer, &back, -entry_walk.t);
+    if (fold.triangle >= 0 && fold.triangle != entry_walk.triangle &&
+        rtcd_tracer_leaves(tracer, fold.triangle, c->direction))
+      kind = -1;
+  }
   if (kind < 0) {
     o->retraced = 1;
     rtcd_full_trace(tracer, p, c, 1, o);
