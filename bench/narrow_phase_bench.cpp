@@ -38,12 +38,13 @@ struct Scene {
 };
 
 // `count` copies of the resting pair, 10 units apart so pairs never mix.
-Scene make_scene(const std::string& backend, Mode mode, int count) {
+Scene make_scene(const std::string& backend, Mode mode, int count, bool verify_walks) {
   static const auto a = std::make_shared<Shape>(gen::concave_blob(902, 1));
   static const auto b = std::make_shared<Shape>(gen::concave_blob(902, 2));
   static const double offset = resting_offset(a, b);
   Config config;
   config.mode = mode;
+  config.verify_walks = verify_walks;
   Scene s{make_narrow_phase(backend, config), {}, {}};
   const ShapeId sa = s.narrow->add_shape(a), sb = s.narrow->add_shape(b);
   for (int i = 0; i < count; ++i) {
@@ -57,8 +58,8 @@ Scene make_scene(const std::string& backend, Mode mode, int count) {
 }
 
 // Steady contact: B jitters by 1e-3 (well under displacement_threshold).
-void run(benchmark::State& state, const std::string& backend, Mode mode) {
-  Scene s = make_scene(backend, mode, int(state.range(0)));
+void run(benchmark::State& state, const std::string& backend, Mode mode, bool verify_walks = true) {
+  Scene s = make_scene(backend, mode, int(state.range(0)), verify_walks);
   s.narrow->detect(s.pairs);  // the first, full step
   size_t rays = 0, steps = 0, contacts = 0, walk_steps = 0, up = 0, down = 0;
   double prepare = 0, trace = 0, gather = 0;
@@ -99,10 +100,13 @@ void run(benchmark::State& state, const std::string& backend, Mode mode) {
 void full_basic(benchmark::State& s) { run(s, "basic", Mode::full); }
 void full_embree(benchmark::State& s) { run(s, "embree", Mode::full); }
 void iterative(benchmark::State& s) { run(s, "embree", Mode::iterative); }
+// Walked contacts trusted without the ray back to their entry face.
+void iterative_unverified(benchmark::State& s) { run(s, "embree", Mode::iterative, false); }
 
 BENCHMARK(full_basic)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(full_embree)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(iterative)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
+BENCHMARK(iterative_unverified)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 
 // An OpenCL variant on state.range(1) devices: the first one, or all.
 void opencl(benchmark::State& state, const std::string& variant, Mode mode) {

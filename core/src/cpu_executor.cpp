@@ -198,7 +198,8 @@ rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, cons
   p.max_walk_steps = job.limits.max_walk_steps;
   p.predictive = config.predictive;
   p.watch = watch;
-  p.verify = config.verify_walks;
+  // A convex target cannot fold between a ray's entry and exit faces.
+  p.verify = config.verify_walks && !(target.mesh() && target.mesh()->convex());
   p.iterative = job.iterative;
   return p;
 }

@@ -2,6 +2,7 @@
 // bounds, radius.
 #include "rtcd/mesh.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <numbers>
@@ -177,6 +178,19 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
   }
   if (!report_.open() && signed_volume6 < 0.0)
     fail(MeshErrorKind::inverted, {}, {}, "closed mesh has negative volume: its triangles face inward");
+
+  // Convex: every vertex behind every face's plane (a concave mesh fails at
+  // one of its first faces).
+  if (!report_.open() && report_.zero_area_triangles == 0 && double(nv) * double(nt) <= kMaxConvexTest) {
+    const double tolerance = 1e-6 * radius_;
+    convex_ = true;
+    for (uint32_t t = 0; t < nt && convex_; ++t) {
+      const Eigen::Vector3d a = positions_[triangles_[t][0]].cast<double>();
+      convex_ = std::all_of(positions_.begin(), positions_.end(), [&](const Eigen::Vector3f& p) {
+        return normals_d[t].dot(p.cast<double>() - a) <= tolerance;
+      });
+    }
+  }
 
   // Angle-weighted vertex normals.
   std::vector<Eigen::Vector3d> vn(nv, Eigen::Vector3d::Zero());

@@ -168,6 +168,18 @@ TEST(MeshDerived, AdjacencyFollowsAlgorithm2Numbering) {
   }
 }
 
+// Convex meshes need no fold check on their walks: closed ones with every
+// vertex behind every face, and no other.
+TEST(MeshDerived, ConvexOnlyWhenEveryVertexIsBehindEveryFace) {
+  EXPECT_TRUE(Mesh(tet_positions(), tet_triangles()).convex());
+  EXPECT_TRUE(rtcd::gen::icosphere(1.0, 3).convex());
+  EXPECT_TRUE(rtcd::gen::box({0.5, 1.0, 2.0}).convex());
+  EXPECT_FALSE(rtcd::gen::torus(1.0, 0.3, 24, 12).convex());
+  EXPECT_FALSE(rtcd::gen::concave_blob(902, 1).convex());
+  EXPECT_FALSE(rtcd::gen::u_shape().convex());
+  EXPECT_FALSE(rtcd::gen::open_sheet(4, 1.0, 0.0).convex()) << "open: a line may cross it once";
+}
+
 TEST(MeshDerived, CubeCornerNormalIsTheDiagonalWhateverTheTriangulation) {
   const Mesh m = rtcd::gen::box({0.5, 0.5, 0.5});
   for (size_t v = 0; v < m.vertex_count(); ++v) {

@@ -73,6 +73,11 @@ class Mesh {
   // Largest distance of a vertex from the body origin (maxRadius of eq. 2.1).
   double radius() const { return radius_; }
   const MeshReport& report() const { return report_; }
+  // Closed, and every vertex on or behind every triangle's plane (to 1e-6 of
+  // the radius): a line enters it once and leaves it once. Judged only for
+  // meshes of at most kMaxConvexTest vertex-triangle products (false above).
+  bool convex() const { return convex_; }
+  static constexpr double kMaxConvexTest = 1e8;
 
   size_t vertex_count() const { return positions_.size(); }
   size_t triangle_count() const { return triangles_.size(); }
@@ -89,6 +94,7 @@ class Mesh {
   Aabb bounds_;
   double radius_ = 0.0;
   MeshReport report_;
+  bool convex_ = false;
 };
 
 // A mesh file as its author wrote it, before validation. Vertices are the
