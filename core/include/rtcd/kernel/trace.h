@@ -107,15 +107,16 @@ RTCD_INLINE void rtcd_walk_trace(const rtcd_tracer* tracer, const rtcd_trace_par
                           p->extension);
   /* The walks see the crossings they track, not a fold of the target
    * between them: a vertex that moved out into a gap between its entry and
-   * exit faces would still read as inside. One bounded cast back to the
-   * entry tells: a face the line leaves through there means the vertex is
-   * outside, and the ray is traced again. */
+   * exit faces would still read as inside (and a fold ahead of a vertex
+   * inside makes its depth stale). The line crosses nothing between the
+   * two faces exactly when it crosses nothing between the vertex and
+   * either face: one cast toward the nearer one, no farther, tells; any
+   * other face there sends the ray to a full trace. */
   if (kind == RTCD_RAY_PENETRATING && p->verify) {
-    rtcd_ray back = rtcd_make_ray(c->origin, rtcd_neg(c->direction));
-    rtcd_hit fold = rtcd_tracer_first_hit(tracer, &back, -entry_walk.t);
-    if (fold.triangle >= 0 && fold.triangle != entry_walk.triangle &&
-        rtcd_tracer_leaves(tracer, fold.triangle, c->direction))
-      kind = -1;
+    int ahead = exit_walk.t <= -entry_walk.t;
+    rtcd_ray toward = rtcd_make_ray(c->origin, ahead ? c->direction : rtcd_neg(c->direction));
+    rtcd_hit between = rtcd_tracer_first_hit(tracer, &toward, ahead ? exit_walk.t : -entry_walk.t);
+    if (between.triangle >= 0 && between.triangle != (ahead ? exit_walk.triangle : entry_walk.triangle)) kind = -1;
   }
   if (kind < 0) {
     o->retraced = 1;
