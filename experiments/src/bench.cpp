@@ -99,7 +99,7 @@ double rays_of(const ReplayStep& s) { return s.seconds_rays(); }
 double whole_of(const ReplayStep& s) { return s.seconds; }
 
 struct Judged {
-  size_t deep = 0, missed = 0;
+  size_t deep = 0, missed = 0, false_rays = 0;
   double rate() const { return deep ? double(missed) / double(deep) : NAN; }
 };
 Judged judged(const ReplayRun& run) {
@@ -108,6 +108,7 @@ Judged judged(const ReplayRun& run) {
     if (s.judged) {
       j.deep += s.deep;
       j.missed += s.missed;
+      j.false_rays += s.false_rays;
     }
   return j;
 }
@@ -429,7 +430,7 @@ std::string run_bench(const BenchOptions& o) {
   {
     Table t;
     t.header = {"configuration (1 thread)", "mean ray time in A (ms)", "peak in B (ms)", "mean in C (ms)",
-                "missed rays (judged steps)"};
+                "missed rays (judged steps)", "false rays (judged steps)"};
     Table s;
     s.header = {"speedup, automatic over full", "A (mean)", "B (peak)", "C (mean)"};
     for (const std::string& tracer : tracers) {
@@ -442,7 +443,8 @@ std::string run_bench(const BenchOptions& o) {
         a[p] = stats(autom, bounds[p], bounds[p + 1], rays_of);
       }
       for (const auto& [run, st] : {std::pair{&full, f}, std::pair{&autom, a}})
-        t.rows.push_back({run->config.label, ms(st[0].mean), ms(st[1].peak), ms(st[2].mean), percent(judged(*run).rate())});
+        t.rows.push_back({run->config.label, ms(st[0].mean), ms(st[1].peak), ms(st[2].mean), percent(judged(*run).rate()),
+                          std::to_string(judged(*run).false_rays)});
       s.rows.push_back({tracer, ratio(f[0].mean / a[0].mean), ratio(f[1].peak / a[1].peak), ratio(f[2].mean / a[2].mean)});
     }
     report << "## Table 2.1: ray time per phase, full tracing against the automatic mode\n\n"
@@ -517,7 +519,7 @@ std::string run_bench(const BenchOptions& o) {
     csv << std::setprecision(9)
         << "config,engine,threads,step,time,bodies,pairs,phase,seconds,seconds_rays,seconds_prepare,seconds_full,"
            "seconds_iterative,seconds_gather,pairs_full,pairs_iterative,rays,colliding,contacts,depth_sum,judged,deep,"
-           "missed,bytes_to_device,bytes_from_device\n";
+           "missed,false_rays,bytes_to_device,bytes_from_device\n";
     for (const ReplayRun& r : runs)
       for (uint64_t i = 0; i < r.steps.size(); ++i) {
         const ReplayStep& s = r.steps[i];
@@ -528,7 +530,7 @@ std::string run_bench(const BenchOptions& o) {
             << ',' << s.seconds_prepare << ',' << s.seconds_full << ',' << s.seconds_iterative << ','
             << s.seconds_gather << ',' << s.pairs_full << ',' << s.pairs_iterative << ',' << s.rays << ','
             << s.colliding << ',' << s.contacts << ',' << s.depth_sum << ',' << s.judged << ',' << s.deep << ','
-            << s.missed << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
+            << s.missed << ',' << s.false_rays << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
       }
     std::ofstream host(dir / "host_steps.csv");
     host << std::setprecision(9) << "host,step,bodies,pairs,contacts,seconds_broad,seconds_narrow,seconds_solver,"

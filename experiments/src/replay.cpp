@@ -128,42 +128,54 @@ std::unique_ptr<Runner> make_runner(const ReplayConfig& c, const Shapes& shapes)
 }
 
 // The exact reference's verdict on one step: per pair and side, the source
-// vertices deeper than epsilon inside the other body.
+// vertices deeper than epsilon inside the other body, and those inside or
+// within epsilon of its surface (a contact anywhere else is false). Open
+// targets are not judged: they have no inside.
 struct Verdict {
-  std::vector<std::array<std::vector<uint32_t>, 2>> deep;  // by pair index; [0] a's origins in b, [1] b's in a
+  // By pair index; [0] a's origins in b, [1] b's in a; ascending.
+  std::vector<std::array<std::vector<uint32_t>, 2>> deep, not_outside;
+  std::vector<std::array<bool, 2>> closed;
 };
 
 Verdict judge_exact(const sim::RecordedFrame& frame, const std::vector<size_t>& body_shape,
                     const std::vector<oracle::ExactShape>& exact, double epsilon_scale) {
   Verdict v;
   v.deep.resize(frame.pairs.size());
+  v.not_outside.resize(frame.pairs.size());
+  v.closed.resize(frame.pairs.size());
   tbb::parallel_for(size_t(0), frame.pairs.size(), [&](size_t i) {
     const BodyPair& p = frame.pairs[i];
     const oracle::ExactShape& ea = exact[body_shape[p.a]];
     const oracle::ExactShape& eb = exact[body_shape[p.b]];
     const double epsilon = epsilon_scale * std::max(ea.shape().radius(), eb.shape().radius());
     const auto one_side = [&](const oracle::ExactShape& source, const Pose& source_pose, const oracle::ExactShape& target,
-                              const Pose& target_pose, std::vector<uint32_t>& out) {
+                              const Pose& target_pose, int side) {
+      v.closed[i][side] = target.closed();
       if (!target.closed()) return;
       const auto rays = target.rays_from(source.shape(), source_pose, target_pose, epsilon);
-      for (size_t k = 0; k < rays.size(); ++k)
-        if (rays[k].deep()) out.push_back(uint32_t(k));
+      for (size_t k = 0; k < rays.size(); ++k) {
+        if (rays[k].deep()) v.deep[i][side].push_back(uint32_t(k));
+        if (!rays[k].far_outside()) v.not_outside[i][side].push_back(uint32_t(k));
+      }
     };
-    one_side(ea, frame.poses[p.a], eb, frame.poses[p.b], v.deep[i][0]);
-    one_side(eb, frame.poses[p.b], ea, frame.poses[p.a], v.deep[i][1]);
+    one_side(ea, frame.poses[p.a], eb, frame.poses[p.b], 0);
+    one_side(eb, frame.poses[p.b], ea, frame.poses[p.a], 1);
   });
   return v;
 }
 
-void count_missed(const Verdict& v, const StepResult& r, ReplayStep& out) {
+void count_judged(const Verdict& v, const StepResult& r, ReplayStep& out) {
   std::vector<uint32_t> hit;
   for (size_t i = 0; i < r.pairs.size(); ++i) {
     for (int side = 0; side < 2; ++side) {
-      const auto& deep = v.deep[i][side];
-      if (deep.empty()) continue;
+      if (!v.closed[i][side]) continue;
       hit.clear();
       for (const Contact& c : r.contacts_of(r.pairs[i]))
         if (int(c.source) == side) hit.push_back(c.vertex);
+      const auto& allowed = v.not_outside[i][side];
+      for (uint32_t vertex : hit) out.false_rays += !std::binary_search(allowed.begin(), allowed.end(), vertex);
+      const auto& deep = v.deep[i][side];
+      if (deep.empty()) continue;
       std::sort(hit.begin(), hit.end());
       out.deep += deep.size();
       for (uint32_t vertex : deep) out.missed += !std::binary_search(hit.begin(), hit.end(), vertex);
@@ -236,7 +248,7 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
       out.pairs = frame.pairs.size();
       runners[i]->run(frame, out);
       spent[i] += out.seconds;
-      if (verdict && runners[i]->result()) count_missed(*verdict, *runners[i]->result(), out);
+      if (verdict && runners[i]->result()) count_judged(*verdict, *runners[i]->result(), out);
     }
     if (options.progress) options.progress(step + 1, total);
   }

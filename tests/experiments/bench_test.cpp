@@ -190,7 +190,9 @@ TEST(Replay, EveryEngineSeesTheSameStepsAndTheTracersAgree) {
     if (s % 5 == 0) {
       EXPECT_TRUE(embree.judged);
       EXPECT_EQ(embree.missed, 0u) << "full tracing misses nothing, step " << s;
+      EXPECT_EQ(embree.false_rays, 0u) << "full tracing reports no vertex outside, step " << s;
       EXPECT_LE(runs[2].steps[s].missed, runs[2].steps[s].deep / 100) << "step " << s;
+      EXPECT_EQ(runs[2].steps[s].false_rays, 0u) << "verified walks report no vertex outside, step " << s;
       deep += embree.deep;
       if (embree.colliding > 0) {
         ++colliding_steps;

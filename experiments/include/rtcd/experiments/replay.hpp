@@ -50,9 +50,10 @@ struct ReplayStep {
   double depth_sum = 0;  // summed depth of every contact as the engine reports it
   size_t bytes_to_device = 0, bytes_from_device = 0;  // ours on OpenCL: the step's host <-> device traffic
   // Judged steps (ours): ray origins the exact reference puts deeper than
-  // epsilon inside the other body, and of those the ones with no contact.
+  // epsilon inside the other body, and of those the ones with no contact;
+  // contacts whose origin it puts farther than epsilon outside (false rays).
   bool judged = false;
-  size_t deep = 0, missed = 0;
+  size_t deep = 0, missed = 0, false_rays = 0;
 };
 
 struct ReplayRun {
