@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include <assimp/Importer.hpp>
@@ -147,23 +148,55 @@ MeshData read_obj(const std::filesystem::path& path) {
   return data;
 }
 
-// The vertex count a PLY header declares; the header must end (assimp 5.2
-// loops forever on one that does not).
+// The vertex count a PLY header declares. The header is checked line by
+// line before assimp reads the file: assimp 5.2 loops forever on a header
+// that does not end, and corrupts its heap on a malformed one (an unknown
+// keyword or property type, an element declared twice).
 size_t ply_vertex_count(const std::filesystem::path& path) {
+  static const std::set<std::string> types = {"char",  "uchar",  "short", "ushort", "int",    "uint",
+                                              "float", "double", "int8",  "uint8",  "int16",  "uint16",
+                                              "int32", "uint32", "float32", "float64"};
   std::ifstream in(path, std::ios::binary);
   if (!in) file_error(path, "cannot open");
   std::string line;
   long long vertices = -1;
+  std::set<std::string> elements;
   for (size_t n = 1; n <= 10000 && std::getline(in, line); ++n) {
     if (!line.empty() && line.back() == '\r') line.pop_back();
+    const auto bad = [&](const std::string& why) {
+      file_error(path, "PLY header line " + std::to_string(n) + " (\"" + line.substr(0, 60) + "\"): " + why);
+    };
     std::istringstream words(line);
-    std::string keyword, element;
-    long long count = 0;
-    if (words >> keyword >> element >> count && keyword == "element" && element == "vertex") vertices = count;
-    if (line == "end_header") {
+    std::string keyword;
+    words >> keyword;
+    if (n == 1) {
+      if (line != "ply") bad("expected \"ply\"");
+      continue;
+    }
+    if (keyword == "end_header") {
       if (vertices < 0) file_error(path, "PLY header declares no vertex element");
       return size_t(vertices);
     }
+    if (keyword == "format" || keyword == "comment" || keyword == "obj_info") continue;
+    if (keyword == "element") {
+      std::string name;
+      long long count = -1;
+      if (!(words >> name >> count) || count < 0) bad("expected \"element <name> <count>\"");
+      if (!elements.insert(name).second) bad("element \"" + name + "\" is declared twice");
+      if (name == "vertex") vertices = count;
+      continue;
+    }
+    if (keyword == "property") {
+      if (elements.empty()) bad("a property before any element");
+      std::string type, count_type, name;
+      words >> type;
+      if (type == "list") words >> count_type >> type;
+      if (!types.count(type) || (!count_type.empty() && !types.count(count_type)))
+        bad("unknown property type (expected char, uchar, short, ushort, int, uint, float or double)");
+      if (!(words >> name)) bad("a property without a name");
+      continue;
+    }
+    bad("unknown header keyword \"" + keyword + "\"");
   }
   file_error(path, "PLY header has no end_header line");
 }

@@ -228,8 +228,16 @@ TEST_F(MeshFiles, OffLinesMustMatchItsHeader) {
   expect_file_error(write("index.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n3 0 1 7\n"), "line 6: face 0");
   expect_file_error(write("corners.off", "OFF 3 1 0\n0 0 0\n1 0 0\n0 1 0\n2 0 1\n"), "corner count >= 3");
 }
-TEST_F(MeshFiles, PlyWithoutEndHeader) {
+TEST_F(MeshFiles, PlyHeaderIsCheckedLineByLine) {
   expect_file_error(write("open.ply", "ply\nformat ascii 1.0\n"), "no end_header");
+  // Headers assimp would misread are refused before it sees them, by line.
+  const std::string tail = "property float y\nproperty float z\nend_header\n";
+  expect_file_error(write("type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty fl;oat x\n" + tail),
+                    "line 4 (\"property fl;oat x\"): unknown property type");
+  expect_file_error(write("twice.ply", "ply\nformat ascii 1.0\nelement vertex 1\nelement vertex 2\n" + tail),
+                    "element \"vertex\" is declared twice");
+  expect_file_error(write("word.ply", "ply\nformat ascii 1.0\nelement vertex 1\npropertii 1.0\n" + tail),
+                    "unknown header keyword \"propertii\"");
 }
 
 TEST_F(MeshFiles, ValidationErrorsNameTheFile) {
