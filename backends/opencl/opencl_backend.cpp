@@ -12,7 +12,7 @@
 //      work-item per ray running kernel/trace.h; the outcomes come back and
 //      are written into each job's slot, so the step is in job order;
 //   4. rtcd_keep: the rays each job goes on tracking stay on the device for
-//      the next step's walks (only poses go up, outcomes come down).
+//      the next step's walks (jobs and frames go up, outcomes come down).
 // Any fault (no platform, a failed build, out of memory, a device error)
 // is reported once and the step, and every later one, runs on the CPU
 // executor from the same jobs, so the result does not change.

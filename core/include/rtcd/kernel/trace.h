@@ -108,10 +108,11 @@ RTCD_INLINE void rtcd_walk_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   /* The walks see the crossings they track, not a fold of the target
    * between them: a vertex that moved out into a gap between its entry and
    * exit faces would still read as inside (and a fold ahead of a vertex
-   * inside makes its depth stale). The line crosses nothing between the
-   * two faces exactly when it crosses nothing between the vertex and
-   * either face: one cast toward the nearer one, no farther, tells; any
-   * other face there sends the ray to a full trace. */
+   * inside makes its depth stale). A vertex between the two faces is
+   * outside only if the line crosses the surface on both sides of it, so
+   * one cast toward the nearer face, no farther, catches it; any other face
+   * there sends the ray to a full trace (which also corrects a stale depth
+   * when the fold is ahead and the exit face is the nearer). */
   if (kind == RTCD_RAY_PENETRATING && p->verify) {
     int ahead = exit_walk.t <= -entry_walk.t;
     rtcd_ray toward = rtcd_make_ray(c->origin, ahead ? c->direction : rtcd_neg(c->direction));
