@@ -61,7 +61,7 @@ Scene make_scene(const std::string& backend, Mode mode, int count, bool verify_w
 void run(benchmark::State& state, const std::string& backend, Mode mode, bool verify_walks = true) {
   Scene s = make_scene(backend, mode, int(state.range(0)), verify_walks);
   s.narrow->detect(s.pairs);  // the first, full step
-  size_t rays = 0, steps = 0, contacts = 0, walk_steps = 0, up = 0, down = 0;
+  size_t rays = 0, steps = 0, contacts = 0, walk_steps = 0, fold_casts = 0, up = 0, down = 0;
   double prepare = 0, trace = 0, gather = 0;
   StepResult r;  // reused: a host keeps its result buffers across steps
   for (auto _ : state) {
@@ -75,6 +75,7 @@ void run(benchmark::State& state, const std::string& backend, Mode mode, bool ve
     rays += r.stats.rays_full + r.stats.rays_predictive + r.stats.rays_iterative;
     contacts += r.contacts.size();
     walk_steps += r.stats.walk_steps;
+    fold_casts += r.stats.fold_casts;
     up += r.stats.bytes_to_device;
     down += r.stats.bytes_from_device;
     prepare += r.stats.seconds_prepare;
@@ -94,7 +95,10 @@ void run(benchmark::State& state, const std::string& backend, Mode mode, bool ve
     state.counters["bytes up/step"] = double(up) / double(steps);
     state.counters["bytes down/step"] = double(down) / double(steps);
   }
-  if (mode == Mode::iterative) state.counters["walk steps/ray"] = double(walk_steps) / double(rays);
+  if (mode == Mode::iterative) {
+    state.counters["walk steps/ray"] = double(walk_steps) / double(rays);
+    state.counters["fold casts/step"] = double(fold_casts) / double(steps);
+  }
 }
 
 void full_basic(benchmark::State& s) { run(s, "basic", Mode::full); }

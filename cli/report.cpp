@@ -32,6 +32,7 @@ nlohmann::json stats_json(const StepStats& s) {
           {"nearest_queries", s.nearest_queries},
           {"rays_retraced", s.rays_retraced},
           {"rays_watched", s.rays_watched},
+          {"fold_casts", s.fold_casts},
           {"bytes_to_device", s.bytes_to_device},
           {"bytes_from_device", s.bytes_from_device},
           {"seconds", {{"prepare", s.seconds_prepare},
@@ -91,10 +92,10 @@ void print_table(std::ostream& out, const StepResult& step) {
   }
   const StepStats& s = step.stats;
   std::snprintf(line, sizeof line,
-                "rays: %zu full, %zu predictive, %zu iterative (%zu traced again, %zu watched); candidates %zu; "
-                "nearest queries %zu; walk steps %zu; time %.3f ms\n",
-                s.rays_full, s.rays_predictive, s.rays_iterative, s.rays_retraced, s.rays_watched, s.candidates,
-                s.nearest_queries, s.walk_steps,
+                "rays: %zu full, %zu predictive, %zu iterative (%zu traced again, %zu watched, %zu fold casts); "
+                "candidates %zu; nearest queries %zu; walk steps %zu; time %.3f ms\n",
+                s.rays_full, s.rays_predictive, s.rays_iterative, s.rays_retraced, s.rays_watched, s.fold_casts,
+                s.candidates, s.nearest_queries, s.walk_steps,
                 1e3 * (s.seconds_prepare + s.seconds_full + s.seconds_iterative + s.seconds_gather));
   out << line;
 }

@@ -5,6 +5,7 @@
  * whole source. */
 #include "device_types.h"
 #include "rtcd/kernel/bvh.h"
+#include "rtcd/kernel/fold.h"
 #include "rtcd/kernel/walk.h"
 
 #ifdef RTCD_INJECTED_BUILD_FAILURE
@@ -17,6 +18,9 @@ typedef struct {
   __global const rtcd_int* neighbors;
   __global const rtcd_uchar* zero_area;
   __global const rtcd_vec3* normals;
+  __global const float* clearances;
+  __global const rtcd_uint* ring_first;
+  __global const rtcd_int* ring;
   __global const rtcd_bvh_node* nodes;
   __global const rtcd_uint* primitives;
   rtcd_uint triangle_count;
@@ -48,6 +52,12 @@ RTCD_INLINE rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_r
 
 RTCD_INLINE int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 direction) {
   return rtcd_dot(direction, t->normals[triangle]) > 0.0f;
+}
+
+RTCD_INLINE int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward,
+                                      float reach) {
+  return rtcd_fold_free(face, origin, toward, reach, t->positions, t->triangles, t->normals, t->clearances,
+                        t->ring_first, t->ring);
 }
 
 #include "rtcd/kernel/trace.h"
@@ -131,7 +141,9 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
                                               __global const rtcd_device_shape* shapes,
                                               __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                                               __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                                              __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
+                                              __global const rtcd_vec3* normals, __global const float* clearances,
+                              __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
+                              __global const rtcd_bvh_node* nodes,
                                               __global const rtcd_uint* primitives) {
   rtcd_trace_params p = jobs[c->job].params;
   rtcd_device_shape shape = shapes[jobs[c->job].target];
@@ -144,6 +156,9 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
     t.neighbors = neighbors + 3 * shape.first_triangle;
     t.zero_area = zero_area + shape.first_triangle;
     t.normals = normals + shape.first_triangle;
+    t.clearances = clearances + shape.first_triangle;
+    t.ring_first = ring_first + shape.first_triangle;
+    t.ring = ring;
     t.nodes = nodes + shape.first_node;
     t.primitives = primitives + shape.first_primitive;
     t.triangle_count = shape.triangle_count;
@@ -160,14 +175,16 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
 __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                          __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                          __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                         __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
+                         __global const rtcd_vec3* normals, __global const float* clearances,
+                              __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
+                              __global const rtcd_bvh_node* nodes,
                          __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
                          rtcd_uint ray_count, __global rtcd_outcome* outcomes) {
   rtcd_uint i = get_global_id(0);
   rtcd_candidate c;
   if (i >= ray_count) return;
   c = rays[i];
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, nodes,
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, clearances, ring_first, ring, nodes,
                                      primitives);
 }
 
@@ -176,7 +193,9 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
 __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                                __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                                __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                               __global const rtcd_vec3* normals, __global const rtcd_bvh_node* nodes,
+                               __global const rtcd_vec3* normals, __global const float* clearances,
+                              __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
+                              __global const rtcd_bvh_node* nodes,
                                __global const rtcd_uint* primitives, __global const rtcd_candidate* staging,
                                rtcd_uint item_count, __global const rtcd_uchar* flags,
                                __global rtcd_outcome* outcomes) {
@@ -184,7 +203,7 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
   rtcd_candidate c;
   if (i >= item_count || !flags[i]) return;
   c = staging[i];
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, nodes,
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, clearances, ring_first, ring, nodes,
                                      primitives);
 }
 

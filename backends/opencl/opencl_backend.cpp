@@ -264,6 +264,11 @@ std::shared_ptr<const Runtime> acquire_runtime(const Selection& s, OpenClFault f
 struct ShapeData {
   std::vector<rtcd_device_shape> table;
   std::vector<rtcd_vec3> positions, normals, origins, directions;
+  // Fold guards: ring_first rebased into the one ring list, with a
+  // closing entry after the last mesh's triangles.
+  std::vector<float> clearances;
+  std::vector<rtcd_uint> ring_first{0};
+  std::vector<rtcd_int> ring;
   std::vector<rtcd_uint> triangles, primitives;
   std::vector<rtcd_int> neighbors;
   std::vector<rtcd_uchar> zero_area;
@@ -292,6 +297,12 @@ struct ShapeData {
       append(triangles, mesh->triangles());
       append(neighbors, mesh->neighbors());
       append(normals, mesh->triangle_normals());
+      const Mesh::FoldGuard& guard = mesh->fold_guard();
+      append(clearances, guard.clearance);
+      const rtcd_uint base = rtcd_uint(ring.size());
+      ring_first.pop_back();
+      for (uint32_t first : guard.ring_first) ring_first.push_back(base + first);
+      append(ring, guard.ring);
       zero_area.insert(zero_area.end(), mesh->zero_area().begin(), mesh->zero_area().end());
       if (bvh) {
         const FlatBvh tree = build_flat_bvh(*mesh);
@@ -456,6 +467,7 @@ class OpenClExecutor final : public RayExecutor {
     if (d.shapes_uploaded == data_.table.size()) return;
     d.shapes = {upload_once(data_.table),     upload_once(data_.positions), upload_once(data_.triangles),
                 upload_once(data_.neighbors), upload_once(data_.zero_area), upload_once(data_.normals),
+                upload_once(data_.clearances), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),     upload_once(data_.primitives), upload_once(data_.origins),
                 upload_once(data_.directions)};
     d.shapes_uploaded = data_.table.size();
@@ -611,7 +623,7 @@ class OpenClExecutor final : public RayExecutor {
   // data from the table to the BVH's triangle lists.
   static void bind_jobs_and_shapes(Device& d, cl::Kernel& k) {
     k.setArg(0, d.jobs.buffer);
-    for (int i = 0; i < 8; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);
+    for (int i = 0; i < 11; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);
   }
 
   void enqueue_trace(Device& d) {
@@ -619,9 +631,9 @@ class OpenClExecutor final : public RayExecutor {
     d.host_outcomes.resize(d.ray_count);
     cl::Kernel& k = d.trace;
     bind_jobs_and_shapes(d, k);
-    k.setArg(9, d.rays.buffer);
-    k.setArg(10, rtcd_uint(d.ray_count));
-    k.setArg(11, d.outcomes.buffer);
+    k.setArg(12, d.rays.buffer);
+    k.setArg(13, rtcd_uint(d.ray_count));
+    k.setArg(14, d.outcomes.buffer);
     launch(d, k, d.ray_count);
     read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
     if (runtime_->place_on_device) keep(d, d.first_rays, d.ray_count);
@@ -665,10 +677,10 @@ class OpenClExecutor final : public RayExecutor {
     d.host_flags.resize(d.items);
     cl::Kernel& k = d.trace_items;
     bind_jobs_and_shapes(d, k);
-    k.setArg(9, d.staging.buffer);
-    k.setArg(10, rtcd_uint(d.items));
-    k.setArg(11, d.flags.buffer);
-    k.setArg(12, d.outcomes.buffer);
+    k.setArg(12, d.staging.buffer);
+    k.setArg(13, rtcd_uint(d.items));
+    k.setArg(14, d.flags.buffer);
+    k.setArg(15, d.outcomes.buffer);
     launch(d, k, d.items);
     read(d, d.flags, d.host_flags);
     read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
@@ -708,8 +720,8 @@ class OpenClExecutor final : public RayExecutor {
     s.setArg(3, jobs_count);
     s.setArg(4, rtcd_uint(d.items));
     s.setArg(5, d.shapes[0]);
-    s.setArg(6, d.shapes[8]);
-    s.setArg(7, d.shapes[9]);
+    s.setArg(6, d.shapes[11]);
+    s.setArg(7, d.shapes[12]);
     s.setArg(8, tracked.buffer);
     s.setArg(9, d.flags.buffer);
     s.setArg(10, d.staging.buffer);

@@ -10,6 +10,7 @@
 
 #include "parallel.hpp"
 #include "rtcd/error.hpp"
+#include "rtcd/kernel/fold.h"
 #include "rtcd/kernel/walk.h"
 
 // The CPU side of the tracer that kernel/trace.h calls: a MeshTracer and its mesh.
@@ -33,6 +34,15 @@ static rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_ray* r
 static int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 direction) {
   const Eigen::Vector3f& n = t->mesh->triangle_normals()[size_t(triangle)];
   return rtcd_dot(direction, rtcd_v3(n.x(), n.y(), n.z())) > 0.0f;
+}
+static int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward,
+                                 float reach) {
+  const rtcd::Mesh& m = *t->mesh;
+  const rtcd::Mesh::FoldGuard& g = m.fold_guard();
+  return rtcd_fold_free(face, origin, toward, reach, reinterpret_cast<const rtcd_vec3*>(m.positions().data()),
+                        reinterpret_cast<const rtcd_uint*>(m.triangles().data()),
+                        reinterpret_cast<const rtcd_vec3*>(m.triangle_normals().data()), g.clearance.data(),
+                        g.ring_first.data(), g.ring.data());
 }
 
 #include "rtcd/kernel/trace.h"

@@ -12,6 +12,7 @@
 #include <Eigen/Geometry>
 
 #include "rtcd/error.hpp"
+#include "fold_clearance.hpp"
 #include "topology.hpp"
 
 namespace rtcd {
@@ -191,6 +192,8 @@ void Mesh::validate_and_derive(const MeshOptions& options) {
       });
     }
   }
+
+  fold_guard_ = derive_fold_guard(positions_, triangles_, normals_d);
 
   // Angle-weighted vertex normals.
   std::vector<Eigen::Vector3d> vn(nv, Eigen::Vector3d::Zero());

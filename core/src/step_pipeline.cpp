@@ -94,7 +94,7 @@ struct ShapeEntry {
 struct PairTally {
   size_t contacts = 0, predictive = 0;
   size_t candidates = 0, rays_full = 0, rays_predictive = 0, rays_iterative = 0, walk_steps = 0;
-  size_t nearest_queries = 0, rays_retraced = 0, rays_watched = 0;
+  size_t nearest_queries = 0, rays_retraced = 0, rays_watched = 0, fold_casts = 0;
   std::array<size_t, RTCD_LINE_STATUS_COUNT> endings{};
 
   void count(const RayOutcome& o, bool iterative) {
@@ -105,6 +105,7 @@ struct PairTally {
     rays_predictive += o.predictive_cast;
     nearest_queries += o.nearest_query;
     rays_retraced += o.retraced;
+    fold_casts += o.fold_cast;
     if (iterative) {
       ++rays_iterative;
       walk_steps += o.walk_steps;
@@ -405,6 +406,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     s.nearest_queries += t.nearest_queries;
     s.rays_retraced += t.rays_retraced;
     s.rays_watched += t.rays_watched;
+    s.fold_casts += t.fold_casts;
     for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) s.walk_endings[e] += t.endings[e];
   }
   out.contacts.resize(contacts);

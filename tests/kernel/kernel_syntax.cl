@@ -3,6 +3,7 @@
  * kernels (backends/opencl/kernels.cl) are compiled by a test of their own. */
 #include "rtcd/kernel/bvh.h"
 #include "rtcd/kernel/classify.h"
+#include "rtcd/kernel/fold.h"
 #include "rtcd/kernel/nearest.h"
 #include "rtcd/kernel/volumes.h"
 #include "rtcd/kernel/walk.h"
@@ -13,6 +14,9 @@ typedef struct {
   __global const rtcd_uint* triangles;
   __global const rtcd_int* neighbors;
   __global const rtcd_uchar* zero_area;
+  __global const float* clearance;
+  __global const rtcd_uint* ring_first;
+  __global const rtcd_int* ring;
 } rtcd_tracer;
 rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
   return rtcd_brute_first_hit(ray, t->positions, t->triangles, t->zero_area, 1u, t_max);
@@ -25,6 +29,10 @@ rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_ray* ray, rtc
 }
 int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 direction) {
   return rtcd_dot(direction, t->positions[triangle]) > 0.0f;
+}
+int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward, float reach) {
+  return rtcd_fold_free(face, origin, toward, reach, t->positions, t->triangles, t->positions, t->clearance,
+                        t->ring_first, t->ring);
 }
 #include "rtcd/kernel/trace.h"
 
@@ -49,6 +57,9 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   t.triangles = triangles;
   t.neighbors = neighbors;
   t.zero_area = zero_area;
+  t.clearance = out;
+  t.ring_first = triangles;
+  t.ring = neighbors;
   p.watch_lo = p.watch_hi = ray.origin;
   p.extension = p.reach = 0.1f;
   p.max_walk_steps = 8u;

@@ -79,6 +79,19 @@ class Mesh {
   bool convex() const { return convex_; }
   static constexpr double kMaxConvexTest = 1e8;
 
+  // Per triangle f, what the fold check of kernel/trace.h needs to certify,
+  // without casting a ray, that a segment from a point of f into its inner
+  // side crosses no other face: the ring (the triangles sharing a vertex
+  // with f that reach into its inner side) to test by their planes, and the
+  // clearance (no other face reaching into f's inner side comes closer to
+  // f; a few triangle sizes at most, the reach of the search).
+  struct FoldGuard {
+    std::vector<float> clearance;
+    std::vector<uint32_t> ring_first;  // f's ring: ring[ring_first[f] .. ring_first[f + 1])
+    std::vector<int32_t> ring;
+  };
+  const FoldGuard& fold_guard() const { return fold_guard_; }
+
   size_t vertex_count() const { return positions_.size(); }
   size_t triangle_count() const { return triangles_.size(); }
 
@@ -95,6 +108,7 @@ class Mesh {
   double radius_ = 0.0;
   MeshReport report_;
   bool convex_ = false;
+  FoldGuard fold_guard_;
 };
 
 // A mesh file as its author wrote it, before validation. Vertices are the

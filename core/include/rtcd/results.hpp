@@ -78,6 +78,7 @@ struct StepStats {
   size_t nearest_queries = 0;    // nearest-triangle queries for vertices neither ray met
   size_t rays_retraced = 0;      // walked rays whose walks could not tell inside from outside, traced again
   size_t rays_watched = 0;       // tracked rays that reported nothing (vertices near the target)
+  size_t fold_casts = 0;         // walked contacts whose fold check cast a ray (beyond their face's clearance)
   std::array<size_t, RTCD_LINE_STATUS_COUNT> walk_endings{};  // iterative rays by rtcd_line_status
   size_t bytes_to_device = 0, bytes_from_device = 0;          // host <-> device traffic (0 on the CPU)
   double seconds_prepare = 0, seconds_full = 0, seconds_iterative = 0, seconds_gather = 0;

@@ -9,6 +9,8 @@
  *   rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer*, const rtcd_ray*, rtcd_int start, rtcd_uint max_steps);
  *   int rtcd_tracer_leaves(const rtcd_tracer*, rtcd_int triangle, rtcd_vec3 direction);
  *     (direction . the triangle's unit normal > 0)
+ *   int rtcd_tracer_fold_free(const rtcd_tracer*, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward, float reach);
+ *     (rtcd_fold_free of fold.h over the mesh's FoldGuard)
  * The CPU executor backs it with a MeshTracer, the device with its own
  * brute-force or BVH traversal over buffers. */
 #ifndef RTCD_KERNEL_TRACE_H
@@ -115,9 +117,17 @@ RTCD_INLINE void rtcd_walk_trace(const rtcd_tracer* tracer, const rtcd_trace_par
    * when the fold is ahead and the exit face is the nearer). */
   if (kind == RTCD_RAY_PENETRATING && p->verify) {
     int ahead = exit_walk.t <= -entry_walk.t;
-    rtcd_ray toward = rtcd_make_ray(c->origin, ahead ? c->direction : rtcd_neg(c->direction));
-    rtcd_hit between = rtcd_tracer_first_hit(tracer, &toward, ahead ? exit_walk.t : -entry_walk.t);
-    if (between.triangle >= 0 && between.triangle != (ahead ? exit_walk.triangle : entry_walk.triangle)) kind = -1;
+    float reach = ahead ? exit_walk.t : -entry_walk.t;
+    rtcd_int face = ahead ? exit_walk.triangle : entry_walk.triangle;
+    rtcd_vec3 toward = ahead ? c->direction : rtcd_neg(c->direction);
+    /* Most contacts lie where the face's neighbours and clearance already
+     * rule a fold out (fold.h); elsewhere a ray looks. */
+    o->fold_cast = !rtcd_tracer_fold_free(tracer, face, c->origin, toward, reach);
+    if (o->fold_cast) {
+      rtcd_ray cast = rtcd_make_ray(c->origin, toward);
+      rtcd_hit between = rtcd_tracer_first_hit(tracer, &cast, reach);
+      if (between.triangle >= 0 && between.triangle != face) kind = -1;
+    }
   }
   if (kind < 0) {
     o->retraced = 1;

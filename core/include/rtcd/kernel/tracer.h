@@ -40,6 +40,7 @@ typedef struct {
   rtcd_uchar predictive_cast; /* an outward ray was traced too */
   rtcd_uchar nearest_query; /* a nearest-triangle query was made */
   rtcd_uchar retraced;      /* iterative: the walks could not be trusted (rtcd_walked_kind), traced again */
+  rtcd_uchar fold_cast;     /* iterative: the fold check cast a ray (the contact lies beyond its face's clearance) */
 } rtcd_outcome;
 
 /* One job's parameters, the same for all of its rays. */
@@ -69,6 +70,7 @@ RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
   o->predictive_cast = 0;
   o->nearest_query = 0;
   o->retraced = 0;
+  o->fold_cast = 0;
 }
 
 RTCD_INLINE int rtcd_inside_box(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3 hi) {
