@@ -139,12 +139,16 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
     guard.ring_first.assign(nt + 1, 0);
     return guard;
   }
+  // Counted in double: a few small triangles far apart would overflow integers.
   std::array<int64_t, 3> dims{};
   for (;;) {
-    for (int k = 0; k < 3; ++k) dims[k] = std::max<int64_t>(1, int64_t(std::ceil((hi[k] - lo[k]) / h)));
-    if (dims[0] * dims[1] * dims[2] <= int64_t(8 * nt + 64)) break;
-    h *= 1.25;
+    double cells = 1;
+    for (int k = 0; k < 3; ++k) cells *= std::max(1.0, std::ceil((hi[k] - lo[k]) / h));
+    const double most = double(8 * nt + 64);
+    if (cells <= most) break;
+    h *= std::max(1.25, std::cbrt(cells / most));
   }
+  for (int k = 0; k < 3; ++k) dims[k] = std::max<int64_t>(1, int64_t(std::ceil((hi[k] - lo[k]) / h)));
   auto cell_of = [&](double x, int k) { return std::clamp<int64_t>(int64_t((x - lo[k]) / h), 0, dims[k] - 1); };
   auto box_cells = [&](const std::array<Vec, 3>& c, std::array<int64_t, 3>& a, std::array<int64_t, 3>& b) {
     for (int k = 0; k < 3; ++k) {

@@ -108,4 +108,17 @@ TEST(FoldGuard, FlatNeighboursAreNotInTheRing) {
     }
 }
 
+TEST(FoldGuard, SmallFacesFarApartNeedFewCells) {
+  // Two millimetre triangles near the origin and one far out: a grid of
+  // their mean size would need 1e19 cells; it is coarsened to a few.
+  const float far = 9e11f, size = 1e6f;
+  const rtcd::Mesh m({{0, 0, 0}, {1e-3f, 0, 0}, {0, 1e-3f, 0}, {0, 0, 1}, {1e-3f, 0, 1}, {0, 1e-3f, 1},
+                      {far, far, far}, {far + size, far, far}, {far, far + size, far}},
+                     {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}});
+  const rtcd::Mesh::FoldGuard& g = m.fold_guard();
+  ASSERT_EQ(g.clearance.size(), 3u);
+  for (float c : g.clearance) EXPECT_GE(c, 0.0f);
+  EXPECT_EQ(g.ring.size(), 0u);  // no two share a vertex
+}
+
 }  // namespace
