@@ -104,7 +104,7 @@ void run(benchmark::State& state, const std::string& backend, Mode mode, bool ve
 void full_basic(benchmark::State& s) { run(s, "basic", Mode::full); }
 void full_embree(benchmark::State& s) { run(s, "embree", Mode::full); }
 void iterative(benchmark::State& s) { run(s, "embree", Mode::iterative); }
-// Walked contacts trusted without the ray back to their entry face.
+// Walked contacts trusted without the fold check.
 void iterative_unverified(benchmark::State& s) { run(s, "embree", Mode::iterative, false); }
 
 BENCHMARK(full_basic)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);

@@ -62,8 +62,8 @@ Config Knobs::config() const {
 void add_knobs(CLI::App& command, Knobs& k) {
   command.add_flag("--no-predictive", k.no_predictive, "Do not cast predictive rays");
   command.add_flag("--no-verify-walks", k.no_verify_walks,
-                   "Trust walked contacts without the ray back to their entry face (faster; concave targets may "
-                   "report a vertex in a fold as inside)");
+                   "Trust walked contacts without the fold check (faster; concave targets may report a vertex "
+                   "in a fold as inside)");
   command.add_option("--max-walk-steps", k.max_walk_steps, "Walk step limit [1, 1000000] (default: derived per pair)");
   command.add_option("--displacement-threshold", k.displacement_threshold,
                      "Equation 2.1 threshold (default: derived per pair)");

@@ -92,8 +92,9 @@ TEST_P(Differential, BoundsHold) {
     // rate); most judged steps still walk, so the bounds below judge walks.
     EXPECT_GE(s.iterative_pairs, s.pairs / 2) << "most judged steps must walk";
     EXPECT_LE(s.missed_rate(), 0.005) << s.missed << " of " << s.deep << " deep origins missed";
-    // A walked contact is checked back to its entry face (verify_walks), so
-    // a vertex in a concave target's fold is not reported.
+    // A walked contact is checked for a fold between its entry and exit
+    // faces (verify_walks), so a vertex in a concave target's fold is not
+    // reported.
     EXPECT_EQ(s.false_rays, 0u) << "of " << s.far_outside << " origins outside";
     report_first(family, r, o, [](const PairMetrics& m) { return m.false_rays > 0; }, "false ray");
   }

@@ -56,7 +56,7 @@ typedef struct {
   rtcd_int predictive;
   rtcd_int watch; /* vertices near the target are watched (predictive rays on, not Mode::full) */
   rtcd_int iterative;
-  rtcd_int verify; /* walked contacts are checked for a fold back to their entry face */
+  rtcd_int verify; /* walked contacts are checked for a fold between their entry and exit faces */
 } rtcd_trace_params;
 
 RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
