@@ -330,10 +330,18 @@ struct GrowingBuffer {
   size_t bytes = 0;
 };
 
+// Device::shapes by name, in upload order: the trace kernels take the
+// first kTracedShapeBuffers, after the jobs.
+enum ShapeBuffer : size_t {
+  kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kClearances, kRingFirst, kRing, kNodes, kPrimitives,
+  kOrigins, kDirections
+};
+constexpr size_t kTracedShapeBuffers = kOrigins;
+
 struct Device {
   cl::CommandQueue queue;
   cl::Kernel select, count, scatter, trace, trace_items, keep;
-  // Shape data, in ShapeData's order.
+  // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
   GrowingBuffer jobs, first_items, frames, flags, staging, slots, counts, first_rays, rays, outcomes;
@@ -465,6 +473,7 @@ class OpenClExecutor final : public RayExecutor {
 
   void upload_shapes(Device& d) {
     if (d.shapes_uploaded == data_.table.size()) return;
+    // In ShapeBuffer's order.
     d.shapes = {upload_once(data_.table),     upload_once(data_.positions), upload_once(data_.triangles),
                 upload_once(data_.neighbors), upload_once(data_.zero_area), upload_once(data_.normals),
                 upload_once(data_.clearances), upload_once(data_.ring_first), upload_once(data_.ring),
@@ -620,20 +629,22 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // The arguments both trace kernels open with: the jobs, then the shape
-  // data from the table to the BVH's triangle lists.
-  static void bind_jobs_and_shapes(Device& d, cl::Kernel& k) {
+  // data from the table to the BVH's triangle lists. Returns the next
+  // argument's index.
+  static cl_uint bind_jobs_and_shapes(Device& d, cl::Kernel& k) {
     k.setArg(0, d.jobs.buffer);
-    for (int i = 0; i < 11; ++i) k.setArg(1 + i, d.shapes[size_t(i)]);
+    for (size_t i = 0; i < kTracedShapeBuffers; ++i) k.setArg(cl_uint(1 + i), d.shapes[i]);
+    return cl_uint(1 + kTracedShapeBuffers);
   }
 
   void enqueue_trace(Device& d) {
     reserve(d.outcomes, d.ray_count * sizeof(rtcd_outcome));
     d.host_outcomes.resize(d.ray_count);
     cl::Kernel& k = d.trace;
-    bind_jobs_and_shapes(d, k);
-    k.setArg(12, d.rays.buffer);
-    k.setArg(13, rtcd_uint(d.ray_count));
-    k.setArg(14, d.outcomes.buffer);
+    const cl_uint next = bind_jobs_and_shapes(d, k);
+    k.setArg(next, d.rays.buffer);
+    k.setArg(next + 1, rtcd_uint(d.ray_count));
+    k.setArg(next + 2, d.outcomes.buffer);
     launch(d, k, d.ray_count);
     read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
     if (runtime_->place_on_device) keep(d, d.first_rays, d.ray_count);
@@ -676,11 +687,11 @@ class OpenClExecutor final : public RayExecutor {
     d.host_outcomes.resize(d.items);
     d.host_flags.resize(d.items);
     cl::Kernel& k = d.trace_items;
-    bind_jobs_and_shapes(d, k);
-    k.setArg(12, d.staging.buffer);
-    k.setArg(13, rtcd_uint(d.items));
-    k.setArg(14, d.flags.buffer);
-    k.setArg(15, d.outcomes.buffer);
+    const cl_uint next = bind_jobs_and_shapes(d, k);
+    k.setArg(next, d.staging.buffer);
+    k.setArg(next + 1, rtcd_uint(d.items));
+    k.setArg(next + 2, d.flags.buffer);
+    k.setArg(next + 3, d.outcomes.buffer);
     launch(d, k, d.items);
     read(d, d.flags, d.host_flags);
     read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
@@ -719,9 +730,9 @@ class OpenClExecutor final : public RayExecutor {
     s.setArg(2, d.frames.buffer);
     s.setArg(3, jobs_count);
     s.setArg(4, rtcd_uint(d.items));
-    s.setArg(5, d.shapes[0]);
-    s.setArg(6, d.shapes[11]);
-    s.setArg(7, d.shapes[12]);
+    s.setArg(5, d.shapes[kTable]);
+    s.setArg(6, d.shapes[kOrigins]);
+    s.setArg(7, d.shapes[kDirections]);
     s.setArg(8, tracked.buffer);
     s.setArg(9, d.flags.buffer);
     s.setArg(10, d.staging.buffer);

@@ -12,61 +12,12 @@
 #include <tbb/enumerable_thread_specific.h>
 
 #include "parallel.hpp"
+#include "rtcd/geometry.hpp"
 
 namespace rtcd {
 namespace {
 
 using Vec = Eigen::Vector3d;
-
-// Squared distance from p to the closest point of triangle abc (by its
-// Voronoi regions).
-double point_triangle_distance2(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
-  const Vec ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return ap.squaredNorm();
-  const Vec bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return bp.squaredNorm();
-  const Vec cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return cp.squaredNorm();
-  const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return (p - (a + ab * (d1 / (d1 - d3)))).squaredNorm();
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return (p - (a + ac * (d2 / (d2 - d6)))).squaredNorm();
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0)
-    return (p - (b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6))))).squaredNorm();
-  const double scale = 1.0 / (va + vb + vc);
-  return (p - (a + ab * (vb * scale) + ac * (vc * scale))).squaredNorm();
-}
-
-// Squared distance between segments p1q1 and p2q2 (clamped closest
-// parameters; a point segment is handled as one).
-double segment_distance2(const Vec& p1, const Vec& q1, const Vec& p2, const Vec& q2) {
-  const Vec d1 = q1 - p1, d2 = q2 - p2, r = p1 - p2;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r);
-  double s = 0, t = 0;
-  if (a <= 0 && e <= 0) return r.squaredNorm();
-  if (a <= 0) {
-    t = std::clamp(f / e, 0.0, 1.0);
-  } else {
-    const double c = d1.dot(r);
-    if (e <= 0) {
-      s = std::clamp(-c / a, 0.0, 1.0);
-    } else {
-      const double b = d1.dot(d2), denom = a * e - b * b;
-      s = denom > 0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-      t = (b * s + f) / e;
-      if (t < 0) {
-        t = 0;
-        s = std::clamp(-c / a, 0.0, 1.0);
-      } else if (t > 1) {
-        t = 1;
-        s = std::clamp((b - c) / a, 0.0, 1.0);
-      }
-    }
-  }
-  return ((p1 + d1 * s) - (p2 + d2 * t)).squaredNorm();
-}
 
 // Segment pq passes through triangle abc (not merely touching its plane
 // from one side); coplanar cases are left to the distance terms.
@@ -87,12 +38,11 @@ double triangle_distance(const std::array<Vec, 3>& f, const std::array<Vec, 3>& 
       return 0.0;
   double best = std::numeric_limits<double>::infinity();
   for (int i = 0; i < 3; ++i) {
-    best = std::min({best, point_triangle_distance2(f[i], g[0], g[1], g[2]),
-                     point_triangle_distance2(g[i], f[0], f[1], f[2])});
-    for (int j = 0; j < 3; ++j)
-      best = std::min(best, segment_distance2(f[i], f[(i + 1) % 3], g[j], g[(j + 1) % 3]));
+    best = std::min({best, (f[i] - closest_on_triangle(f[i], g[0], g[1], g[2])).norm(),
+                     (g[i] - closest_on_triangle(g[i], f[0], f[1], f[2])).norm()});
+    for (int j = 0; j < 3; ++j) best = std::min(best, segment_distance(f[i], f[(i + 1) % 3], g[j], g[(j + 1) % 3]));
   }
-  return std::sqrt(best);
+  return best;
 }
 
 // Shells of grid cells searched around a triangle's box: the clearance is
@@ -134,11 +84,8 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
     hi = hi.cwiseMax(thi);
     size_sum += (thi - tlo).maxCoeff();
   }
+  // Validation keeps the body's size above kMinBodySize, so h > 0.
   double h = std::max(size_sum / double(nt), 1e-9 * (hi - lo).norm());
-  if (!(h > 0)) {
-    guard.ring_first.assign(nt + 1, 0);
-    return guard;
-  }
   // Counted in double: a few small triangles far apart would overflow integers.
   std::array<int64_t, 3> dims{};
   for (;;) {
@@ -190,15 +137,17 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
                                    (c[2] - centre[t]).squaredNorm()}));
   }
 
-  // Coplanar neighbours of a flat region sit off f's plane by the float
-  // rounding of the coordinates.
-  auto reaches_inside = [&](uint32_t f, const std::array<Vec, 3>& cf, uint32_t g) {
-    if (normals[g].isZero()) return false;  // never hit
+  // Which triangles reach into f's inner side: below its plane by more
+  // than the float rounding of the coordinates, off which a flat region's
+  // coplanar neighbours sit.
+  auto reaches_inside_of = [&](uint32_t f, const std::array<Vec, 3>& cf) {
     const double magnitude = std::max({cf[0].cwiseAbs().maxCoeff(), cf[1].cwiseAbs().maxCoeff(),
                                        cf[2].cwiseAbs().maxCoeff(), (cf[1] - cf[0]).norm(), (cf[2] - cf[0]).norm()});
-    const Vec& n = normals[f];
-    const auto cg = corners(g);
-    return std::min({n.dot(cg[0] - cf[0]), n.dot(cg[1] - cf[0]), n.dot(cg[2] - cf[0])}) < -1e-5 * magnitude;
+    return [&, n = normals[f], origin = cf[0], tolerance = 1e-5 * magnitude](uint32_t g) {
+      if (normals[g].isZero()) return false;  // never hit
+      const auto cg = corners(g);
+      return std::min({n.dot(cg[0] - origin), n.dot(cg[1] - origin), n.dot(cg[2] - origin)}) < -tolerance;
+    };
   };
 
   // The rings: tested at run time by their planes.
@@ -207,14 +156,14 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
     for (uint32_t f = 0; f < nt; ++f) {
       guard.ring_first[f] = uint32_t(guard.ring.size());
       if (normals[f].isZero()) continue;  // zero area: never a face a contact leaves through
-      const auto cf = corners(f);
+      const auto reaches_inside = reaches_inside_of(f, corners(f));
       seen[f] = f;
       for (uint32_t v : triangles[f])
         for (uint32_t k = fan_first[v]; k < fan_first[v + 1]; ++k) {
           const uint32_t g = fan[k];
           if (seen[g] == f) continue;
           seen[g] = f;
-          if (reaches_inside(f, cf, g)) guard.ring.push_back(int32_t(g));
+          if (reaches_inside(g)) guard.ring.push_back(int32_t(g));
         }
     }
     guard.ring_first[nt] = uint32_t(guard.ring.size());
@@ -228,6 +177,7 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
     if (normals[f].isZero()) return;
     std::vector<uint32_t>& seen = marks.local();
     const auto cf = corners(f);
+    const auto reaches_inside = reaches_inside_of(f, cf);
     seen[f] = f;
     for (uint32_t k = guard.ring_first[f]; k < guard.ring_first[f + 1]; ++k) seen[uint32_t(guard.ring[k])] = f;
     std::array<int64_t, 3> a, b;
@@ -246,7 +196,7 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
               if (seen[g] == f) continue;
               seen[g] = f;
               if ((centre[g] - centre[f]).norm() - bound[g] - bound[f] >= best) continue;
-              if (reaches_inside(f, cf, g)) best = std::min(best, triangle_distance(cf, corners(g)));
+              if (reaches_inside(g)) best = std::min(best, triangle_distance(cf, corners(g)));
             }
           }
     }

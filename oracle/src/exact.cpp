@@ -10,6 +10,8 @@
 
 #include <Eigen/Geometry>
 
+#include "rtcd/geometry.hpp"
+
 namespace rtcd::oracle {
 namespace {
 
@@ -32,27 +34,6 @@ double line_crossing(const Vec& o, const Vec& d, const Vec& a, const Vec& b, con
   const double v = d.dot(q) * inv;
   if (v < 0.0 || u + v > 1.0) return std::nan("");
   return e2.dot(q) * inv;
-}
-
-// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5).
-Vec closest_on_triangle(const Vec& p, const Vec& a, const Vec& b, const Vec& c) {
-  const Vec ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
-  if (d1 <= 0 && d2 <= 0) return a;
-  const Vec bp = p - b;
-  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
-  if (d3 >= 0 && d4 <= d3) return b;
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
-  const Vec cp = p - c;
-  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
-  if (d6 >= 0 && d5 <= d6) return c;
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
-  const double denom = 1.0 / (va + vb + vc);
-  return a + ab * (vb * denom) + ac * (vc * denom);
 }
 
 // Entry and exit of the ray's line through a box, as [t0, t1]; empty when t0 > t1.

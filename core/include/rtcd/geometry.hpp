@@ -1,4 +1,5 @@
-// Small geometric value types of the public API: poses and boxes.
+// Small geometric value types of the public API, poses and boxes, and the
+// exact closest-point queries in double that oracles and mesh derivations share.
 #pragma once
 
 #include <Eigen/Geometry>
@@ -46,5 +47,14 @@ struct Aabb {
   Aabb transformed(const Pose& pose) const;
   Aabb transformed(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& translation) const;
 };
+
+// Closest point of triangle (a, b, c) to p, by the triangle's Voronoi
+// regions (Ericson, Real-Time Collision Detection 5.1.5); a degenerate
+// triangle answers a.
+Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                    const Eigen::Vector3d& c);
+// Closest distance between segments [p0, p1] and [q0, q1] (Ericson 5.1.9).
+double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
+                        const Eigen::Vector3d& q1);
 
 }  // namespace rtcd
