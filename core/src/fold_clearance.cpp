@@ -74,24 +74,29 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
       for (uint32_t v : triangles[t]) fan[fill[v]++] = t;
   }
 
-  // Cells about the mean triangle size, at most 8 per triangle.
+  // Cells about the mean face size, at most 8 per face. Zero-area
+  // triangles are never hit: they are left out of the grid, and a mesh of
+  // nothing else has nothing to guard.
   Vec lo = Vec::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   double size_sum = 0;
+  size_t faces = 0;
   for (size_t t = 0; t < nt; ++t) {
+    if (normals[t].isZero()) continue;
+    ++faces;
     const auto c = corners(t);
     const Vec tlo = c[0].cwiseMin(c[1]).cwiseMin(c[2]), thi = c[0].cwiseMax(c[1]).cwiseMax(c[2]);
     lo = lo.cwiseMin(tlo);
     hi = hi.cwiseMax(thi);
     size_sum += (thi - tlo).maxCoeff();
   }
-  // Validation keeps the body's size above kMinBodySize, so h > 0.
-  double h = std::max(size_sum / double(nt), 1e-9 * (hi - lo).norm());
+  if (faces == 0) return guard;
+  double h = size_sum / double(faces);  // > 0: a face with area spans some length
   // Counted in double: a few small triangles far apart would overflow integers.
   std::array<int64_t, 3> dims{};
   for (;;) {
     double cells = 1;
     for (int k = 0; k < 3; ++k) cells *= std::max(1.0, std::ceil((hi[k] - lo[k]) / h));
-    const double most = double(8 * nt + 64);
+    const double most = double(8 * faces + 64);
     if (cells <= most) break;
     h *= std::max(1.25, std::cbrt(cells / most));
   }
@@ -115,6 +120,7 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
       fill.assign(first.begin(), first.end() - 1);
     }
     for (size_t t = 0; t < nt; ++t) {
+      if (normals[t].isZero()) continue;
       std::array<int64_t, 3> a, b;
       box_cells(corners(t), a, b);
       for (int64_t z = a[2]; z <= b[2]; ++z)

@@ -1,12 +1,15 @@
 // Mesh files as their authors wrote them: OBJ (tinyobjloader), OFF (read
 // here), PLY and STL (assimp); OBJ written.
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <set>
 #include <sstream>
+#include <vector>
 
 #include <assimp/Importer.hpp>
 #include <assimp/scene.h>
@@ -148,57 +151,91 @@ MeshData read_obj(const std::filesystem::path& path) {
   return data;
 }
 
-// The vertex count a PLY header declares. The header is checked line by
-// line before assimp reads the file: assimp 5.2 loops forever on a header
-// that does not end, and corrupts its heap on a malformed one (an unknown
-// keyword or property type, an element declared twice).
+// The vertex count a PLY file declares. The header is checked line by line,
+// and an ASCII body line by line against it, before assimp reads the file:
+// assimp 5.2 loops forever on a header that does not end, corrupts its heap
+// on a malformed one (an unknown keyword or property type, an element
+// declared twice), and allocates whatever count a body's list states.
 size_t ply_vertex_count(const std::filesystem::path& path) {
   static const std::set<std::string> types = {"char",  "uchar",  "short", "ushort", "int",    "uint",
                                               "float", "double", "int8",  "uint8",  "int16",  "uint16",
                                               "int32", "uint32", "float32", "float64"};
+  struct Element {
+    std::string name;
+    long long count = 0;
+    std::vector<bool> lists;  // per property: a list (a count, then that many values)
+  };
   std::ifstream in(path, std::ios::binary);
   if (!in) file_error(path, "cannot open");
   std::string line;
   long long vertices = -1;
-  std::set<std::string> elements;
-  for (size_t n = 1; n <= 10000 && std::getline(in, line); ++n) {
+  bool ascii = false;
+  std::vector<Element> elements;
+  size_t n = 0;
+  auto bad = [&](const std::string& part, const std::string& why) {
+    std::string shown = line.substr(0, 60);
+    for (char& c : shown)
+      if (!std::isprint(static_cast<unsigned char>(c))) c = '?';  // the message stays one printable line
+    file_error(path, "PLY " + part + " line " + std::to_string(n) + " (\"" + shown + "\"): " + why);
+  };
+  for (bool header = true; header;) {
+    if (n == 10000 || !std::getline(in, line)) file_error(path, "PLY header has no end_header line");
+    ++n;
     if (!line.empty() && line.back() == '\r') line.pop_back();
-    const auto bad = [&](const std::string& why) {
-      file_error(path, "PLY header line " + std::to_string(n) + " (\"" + line.substr(0, 60) + "\"): " + why);
-    };
     std::istringstream words(line);
     std::string keyword;
     words >> keyword;
     if (n == 1) {
-      if (line != "ply") bad("expected \"ply\"");
-      continue;
-    }
-    if (keyword == "end_header") {
+      if (line != "ply") bad("header", "expected \"ply\"");
+    } else if (keyword == "end_header") {
       if (vertices < 0) file_error(path, "PLY header declares no vertex element");
-      return size_t(vertices);
-    }
-    if (keyword == "format" || keyword == "comment" || keyword == "obj_info") continue;
-    if (keyword == "element") {
-      std::string name;
-      long long count = -1;
-      if (!(words >> name >> count) || count < 0) bad("expected \"element <name> <count>\"");
-      if (!elements.insert(name).second) bad("element \"" + name + "\" is declared twice");
-      if (name == "vertex") vertices = count;
-      continue;
-    }
-    if (keyword == "property") {
-      if (elements.empty()) bad("a property before any element");
+      header = false;
+    } else if (keyword == "format") {
+      std::string format;
+      words >> format;
+      ascii = format == "ascii";
+    } else if (keyword == "element") {
+      Element e;
+      if (!(words >> e.name >> e.count) || e.count < 0) bad("header", "expected \"element <name> <count>\"");
+      if (std::any_of(elements.begin(), elements.end(), [&](const Element& o) { return o.name == e.name; }))
+        bad("header", "element \"" + e.name + "\" is declared twice");
+      if (e.name == "vertex") vertices = e.count;
+      elements.push_back(e);
+    } else if (keyword == "property") {
+      if (elements.empty()) bad("header", "a property before any element");
       std::string type, count_type, name;
       words >> type;
       if (type == "list") words >> count_type >> type;
       if (!types.count(type) || (!count_type.empty() && !types.count(count_type)))
-        bad("unknown property type (expected char, uchar, short, ushort, int, uint, float or double)");
-      if (!(words >> name)) bad("a property without a name");
-      continue;
+        bad("header", "unknown property type (expected char, uchar, short, ushort, int, uint, float or double)");
+      if (!(words >> name)) bad("header", "a property without a name");
+      elements.back().lists.push_back(!count_type.empty());
+    } else if (keyword != "comment" && keyword != "obj_info") {
+      bad("header", "unknown header keyword \"" + keyword + "\"");
     }
-    bad("unknown header keyword \"" + keyword + "\"");
   }
-  file_error(path, "PLY header has no end_header line");
+  if (!ascii) return size_t(vertices);
+  // One element per line, its values as the header lays them out.
+  for (const Element& e : elements)
+    for (long long i = 0; i < e.count; ++i) {
+      if (!std::getline(in, line))
+        file_error(path, "PLY body ends at " + e.name + " " + std::to_string(i) + " of " + std::to_string(e.count));
+      ++n;
+      std::istringstream words(line);
+      const std::vector<std::string> values{std::istream_iterator<std::string>(words), {}};
+      size_t k = 0;
+      for (bool list : e.lists) {
+        if (k >= values.size()) bad("body", "fewer values than the header's " + e.name + " properties");
+        long long count = -1;
+        const std::string& v = values[k];
+        if (list && (std::from_chars(v.data(), v.data() + v.size(), count).ptr != v.data() + v.size() || count < 0 ||
+                     size_t(count) >= values.size() - k))
+          bad("body", "list count \"" + v.substr(0, 20) + "\" is not the number of values that follow it");
+        k += list ? 1 + size_t(count) : 1;
+      }
+      if (k != values.size()) bad("body", "more values than the header's " + e.name + " properties");
+    }
+  return size_t(vertices);
 }
 
 // PLY and STL through assimp, without post-processing: assimp keeps a PLY's

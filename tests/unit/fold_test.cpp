@@ -121,4 +121,15 @@ TEST(FoldGuard, SmallFacesFarApartNeedFewCells) {
   EXPECT_EQ(g.ring.size(), 0u);  // no two share a vertex
 }
 
+TEST(FoldGuard, OnlyZeroAreaTrianglesLeaveNothingToGuard) {
+  // The body's size comes from a vertex no triangle uses; the one triangle
+  // (kept with allow_zero_area) is a point: no face to size a grid by
+  // (mesh_file fuzzer).
+  rtcd::MeshOptions options;
+  options.allow_zero_area = true;
+  const rtcd::Mesh m({{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {1, 1, 1}}, {{0, 1, 2}}, options);
+  EXPECT_EQ(m.fold_guard().clearance, std::vector<float>{0.0f});
+  EXPECT_TRUE(m.fold_guard().ring.empty());
+}
+
 }  // namespace

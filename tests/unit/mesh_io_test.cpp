@@ -240,6 +240,20 @@ TEST_F(MeshFiles, PlyHeaderIsCheckedLineByLine) {
                     "unknown header keyword \"propertii\"");
 }
 
+TEST_F(MeshFiles, PlyAsciiBodyIsCheckedAgainstItsHeader) {
+  // assimp allocates whatever a list's count says: a count the line does
+  // not hold is refused first, naming the line (mesh_file fuzzer).
+  const std::string header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n";
+  EXPECT_NO_THROW(rtcd::read_mesh_file(write("ok.ply", header + "3 0 1 2\n")));
+  expect_file_error(write("count.ply", header + "300000000 0 1 2\n"),
+                    "PLY body line 13 (\"300000000 0 1 2\"): list count");
+  expect_file_error(write("nul.ply", header + std::string("3\0 0 1 2\n", 9)), "list count");
+  expect_file_error(write("extra.ply", header + "3 0 1 2 7\n"), "more values than the header's face properties");
+  expect_file_error(write("short.ply", header.substr(0, header.size() - 6)), "PLY body ends at vertex 2 of 3");
+}
+
 TEST_F(MeshFiles, ValidationErrorsNameTheFile) {
   // An OFF whose third face is wound against the others.
   std::string text = off_text(box_);
