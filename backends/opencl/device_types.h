@@ -4,6 +4,7 @@
 #define RTCD_OPENCL_DEVICE_TYPES_H
 
 #include "rtcd/kernel/bvh.h"
+#include "rtcd/kernel/fold.h"
 #include "rtcd/kernel/tracer.h"
 
 /* A registered shape: where its data lies in the concatenated buffers. */

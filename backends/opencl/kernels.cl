@@ -18,7 +18,7 @@ typedef struct {
   __global const rtcd_int* neighbors;
   __global const rtcd_uchar* zero_area;
   __global const rtcd_vec3* normals;
-  __global const float* clearances;
+  __global const rtcd_fold_face* fold_faces;
   __global const rtcd_uint* ring_first;
   __global const rtcd_int* ring;
   __global const rtcd_bvh_node* nodes;
@@ -56,8 +56,7 @@ RTCD_INLINE int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd
 
 RTCD_INLINE int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward,
                                       float reach) {
-  return rtcd_fold_free(face, origin, toward, reach, t->positions, t->triangles, t->normals, t->clearances,
-                        t->ring_first, t->ring);
+  return rtcd_fold_free(face, origin, toward, reach, t->normals, t->fold_faces, t->ring_first, t->ring);
 }
 
 #include "rtcd/kernel/trace.h"
@@ -141,7 +140,7 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
                                               __global const rtcd_device_shape* shapes,
                                               __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                                               __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                                              __global const rtcd_vec3* normals, __global const float* clearances,
+                                              __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
                               __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                               __global const rtcd_bvh_node* nodes,
                                               __global const rtcd_uint* primitives) {
@@ -156,7 +155,7 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
     t.neighbors = neighbors + 3 * shape.first_triangle;
     t.zero_area = zero_area + shape.first_triangle;
     t.normals = normals + shape.first_triangle;
-    t.clearances = clearances + shape.first_triangle;
+    t.fold_faces = fold_faces + shape.first_triangle;
     t.ring_first = ring_first + shape.first_triangle;
     t.ring = ring;
     t.nodes = nodes + shape.first_node;
@@ -175,7 +174,7 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
 __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                          __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                          __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                         __global const rtcd_vec3* normals, __global const float* clearances,
+                         __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
                               __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                               __global const rtcd_bvh_node* nodes,
                          __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
@@ -184,7 +183,7 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
   rtcd_candidate c;
   if (i >= ray_count) return;
   c = rays[i];
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, clearances, ring_first, ring, nodes,
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces, ring_first, ring, nodes,
                                      primitives);
 }
 
@@ -193,7 +192,7 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
 __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                                __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                                __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                               __global const rtcd_vec3* normals, __global const float* clearances,
+                               __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
                               __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                               __global const rtcd_bvh_node* nodes,
                                __global const rtcd_uint* primitives, __global const rtcd_candidate* staging,
@@ -203,7 +202,7 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
   rtcd_candidate c;
   if (i >= item_count || !flags[i]) return;
   c = staging[i];
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, clearances, ring_first, ring, nodes,
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces, ring_first, ring, nodes,
                                      primitives);
 }
 

@@ -266,7 +266,7 @@ struct ShapeData {
   std::vector<rtcd_vec3> positions, normals, origins, directions;
   // Fold guards: ring_first rebased into the one ring list, with a
   // closing entry after the last mesh's triangles.
-  std::vector<float> clearances;
+  std::vector<rtcd_fold_face> fold_faces;
   std::vector<rtcd_uint> ring_first{0};
   std::vector<rtcd_int> ring;
   std::vector<rtcd_uint> triangles, primitives;
@@ -298,7 +298,7 @@ struct ShapeData {
       append(neighbors, mesh->neighbors());
       append(normals, mesh->triangle_normals());
       const Mesh::FoldGuard& guard = mesh->fold_guard();
-      append(clearances, guard.clearance);
+      append(fold_faces, guard.faces);
       const rtcd_uint base = rtcd_uint(ring.size());
       ring_first.pop_back();
       for (uint32_t first : guard.ring_first) ring_first.push_back(base + first);
@@ -333,7 +333,7 @@ struct GrowingBuffer {
 // Device::shapes by name, in upload order: the trace kernels take the
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
-  kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kClearances, kRingFirst, kRing, kNodes, kPrimitives,
+  kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kPrimitives,
   kOrigins, kDirections
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
@@ -476,7 +476,7 @@ class OpenClExecutor final : public RayExecutor {
     // In ShapeBuffer's order.
     d.shapes = {upload_once(data_.table),     upload_once(data_.positions), upload_once(data_.triangles),
                 upload_once(data_.neighbors), upload_once(data_.zero_area), upload_once(data_.normals),
-                upload_once(data_.clearances), upload_once(data_.ring_first), upload_once(data_.ring),
+                upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),     upload_once(data_.primitives), upload_once(data_.origins),
                 upload_once(data_.directions)};
     d.shapes_uploaded = data_.table.size();

@@ -5,6 +5,7 @@
 #include "rtcd/cpu_executor.hpp"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 
@@ -39,10 +40,8 @@ static int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 
                                  float reach) {
   const rtcd::Mesh& m = *t->mesh;
   const rtcd::Mesh::FoldGuard& g = m.fold_guard();
-  return rtcd_fold_free(face, origin, toward, reach, reinterpret_cast<const rtcd_vec3*>(m.positions().data()),
-                        reinterpret_cast<const rtcd_uint*>(m.triangles().data()),
-                        reinterpret_cast<const rtcd_vec3*>(m.triangle_normals().data()), g.clearance.data(),
-                        g.ring_first.data(), g.ring.data());
+  return rtcd_fold_free(face, origin, toward, reach, reinterpret_cast<const rtcd_vec3*>(m.triangle_normals().data()),
+                        reinterpret_cast<const rtcd_fold_face*>(g.faces.data()), g.ring_first.data(), g.ring.data());
 }
 
 #include "rtcd/kernel/trace.h"
@@ -52,6 +51,7 @@ namespace {
 
 static_assert(sizeof(Eigen::Vector3f) == sizeof(rtcd_vec3), "positions are handed to the kernel as packed floats");
 static_assert(sizeof(Mesh::Triangle) == 3 * sizeof(rtcd_uint) && sizeof(Mesh::Neighbors) == 3 * sizeof(rtcd_int));
+static_assert(sizeof(Mesh::FoldGuard::Face) == sizeof(rtcd_fold_face));
 
 rtcd_vec3 to_kernel(const Eigen::Vector3f& v) { return rtcd_v3(v.x(), v.y(), v.z()); }
 
@@ -72,6 +72,8 @@ float float_at_most(double x) {
 constexpr size_t kChunk = 128;
 constexpr size_t kParallelItems = 512;
 constexpr size_t kParallelTraces = 64;
+// Full jobs selected per parallel task, which keeps its own vertex marks.
+constexpr size_t kJobsPerBlock = 16;
 
 class CpuExecutor final : public RayExecutor {
  public:
@@ -96,17 +98,22 @@ class CpuExecutor final : public RayExecutor {
       for_each_index(jobs.size(), work >= kParallelItems, [&](size_t j) {
         params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
         outcomes[j].clear();
-        for_each_candidate(jobs[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
+        for_each_tracked(jobs[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
       });
       return {};  // the rays run where they are
     }
-    // Traced rays cost far more and vary: select per job, then spread the
+    // Traced rays cost far more and vary: select per job (in fixed blocks
+    // of jobs, each with its own marks, kept across steps), then spread the
     // batch's rays over threads in fixed chunks.
-    for_each_index(jobs.size(), work >= kParallelItems, [&](size_t j) {
-      params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
-      candidates_[j].clear();
-      for_each_candidate(jobs[j], [&](const rtcd_candidate& c) { candidates_[j].push_back(c); });
-      outcomes[j].resize(candidates_[j].size());
+    const size_t blocks = (jobs.size() + kJobsPerBlock - 1) / kJobsPerBlock;
+    if (marks_.size() < blocks) marks_.resize(blocks);
+    for_each_index(blocks, work >= kParallelItems, [&](size_t b) {
+      for (size_t j = b * kJobsPerBlock; j < std::min(jobs.size(), (b + 1) * kJobsPerBlock); ++j) {
+        params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
+        candidates_[j].clear();
+        for_each_selected(jobs[j], marks_[b], [&](const rtcd_candidate& c) { candidates_[j].push_back(c); });
+        outcomes[j].resize(candidates_[j].size());
+      }
     });
     // Chunks small enough to spread even a one-pair step over the threads;
     // each ray writes its own slot, so the split never changes a result.
@@ -131,31 +138,51 @@ class CpuExecutor final : public RayExecutor {
     uint32_t job, begin, end;
   };
 
-  // The job's candidate rays in the target's frame (rtcd_place_ray), in
-  // vertex order (full) or tracked order (iterative), handed to `take`.
+  // A candidate placed in the target's frame (rtcd_place_ray), handed to
+  // `take`; none where the origin is outside the job's overlap box.
   template <class Take>
-  void for_each_candidate(const RayJob& job, const Take& take) const {
+  void place(const RayJob& job, const rtcd_frame& frame, uint32_t vertex, int32_t start, int32_t entry,
+             const Take& take) const {
+    const RaySources& rs = shapes_[job.source]->sources();
+    rtcd_candidate c{vertex, start, entry, 0, {}, {}};
+    if (rtcd_place_ray(&frame, to_kernel(rs.origins[vertex]), to_kernel(rs.directions[vertex]), &c.origin, &c.direction))
+      take(c);
+  }
+
+  // An iterative job's candidates: its tracked rays, in tracked order.
+  template <class Take>
+  void for_each_tracked(const RayJob& job, const Take& take) const {
+    if (job.overlap.empty()) return;
+    const rtcd_frame frame = make_frame(job);
+    for (const TrackedRay& r : job.tracked) place(job, frame, r.vertex, r.triangle, r.entry, take);
+  }
+
+  // A full job's candidates, in vertex order. Most of a body's vertices lie
+  // far from the candidate box: the source's tree of origins turns them
+  // away by whole boxes, each placed in the target's frame as the box
+  // around it (in double, grown well past rounding, so a superset), before
+  // the exact placement decides. `marks` put the vertices found back in
+  // vertex order.
+  template <class Take>
+  void for_each_selected(const RayJob& job, std::vector<uint64_t>& marks, const Take& take) const {
     if (job.overlap.empty()) return;
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
-    auto consider = [&](uint32_t vertex, int32_t start, int32_t entry) {
-      rtcd_candidate c{vertex, start, entry, 0, {}, {}};
-      if (rtcd_place_ray(&frame, to_kernel(rs.origins[vertex]), to_kernel(rs.directions[vertex]), &c.origin, &c.direction))
-        take(c);
-    };
-    if (job.iterative) {
-      for (const TrackedRay& r : job.tracked) consider(r.vertex, r.triangle, r.entry);
-      return;
-    }
-    // Most of a body's vertices lie far from the candidate box: the box seen
-    // from the source's frame, grown well past rounding, turns them away
-    // with six comparisons before the exact placement decides.
-    const Eigen::Matrix3d back = job.rotation.transpose();
+    const Eigen::Matrix3d& rotation = job.rotation;
+    const Eigen::Matrix3d spread = rotation.cwiseAbs();
     const double scale = 1.0 + job.translation.norm() + job.overlap.min.cwiseAbs().maxCoeff() +
                          job.overlap.max.cwiseAbs().maxCoeff();
-    const Aabb near = job.overlap.transformed(back, -(back * job.translation)).grown(1e-9 * scale);
-    for (uint32_t v = 0; v < rs.origins.size(); ++v)
-      if (near.contains(rs.origins[v].cast<double>())) consider(v, -1, -1);
+    const Aabb box = job.overlap.grown(1e-9 * scale);
+    auto may_hold = [&](const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+      const Eigen::Vector3d centre = rotation * (0.5 * (lo.cast<double>() + hi.cast<double>())) + job.translation;
+      const Eigen::Vector3d half = spread * (0.5 * (hi.cast<double>() - lo.cast<double>()));
+      return ((centre + half).array() >= box.min.array()).all() && ((centre - half).array() <= box.max.array()).all();
+    };
+    marks.assign((rs.origins.size() + 63) / 64, 0);
+    rs.visit_leaves(may_hold, [&](uint32_t v) { marks[v / 64] |= uint64_t(1) << (v % 64); });
+    for (size_t w = 0; w < marks.size(); ++w)
+      for (uint64_t bits = marks[w]; bits != 0; bits &= bits - 1)
+        place(job, frame, uint32_t(64 * w + std::countr_zero(bits)), -1, -1, take);
   }
 
   void trace(const RayJob& job, const rtcd_trace_params& params, const rtcd_candidate& c, RayOutcome& o) const {
@@ -186,6 +213,7 @@ class CpuExecutor final : public RayExecutor {
   std::vector<std::vector<rtcd_candidate>> candidates_;  // per job slot; only grows
   std::vector<rtcd_trace_params> params_;                // per job slot
   std::vector<Chunk> chunks_;
+  std::vector<std::vector<uint64_t>> marks_;  // per block of full jobs: the vertices selected
 };
 
 }  // namespace

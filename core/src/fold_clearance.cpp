@@ -56,7 +56,12 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
                                   std::span<const Eigen::Vector3d> normals) {
   const size_t nt = triangles.size(), nv = positions.size();
   Mesh::FoldGuard guard;
-  guard.clearance.assign(nt, 0.0f);
+  guard.faces.assign(nt, {0.0f, 0.0f, 0.0f});
+  for (size_t t = 0; t < nt; ++t) {
+    const Vec v0 = positions[triangles[t][0]].cast<double>();
+    guard.faces[t].offset = float(normals[t].cast<float>().cast<double>().dot(v0));
+    guard.faces[t].size = float(v0.cwiseAbs().sum());
+  }
   guard.ring_first.assign(nt + 1, 0);
   auto corners = [&](size_t t) {
     return std::array<Vec, 3>{positions[triangles[t][0]].cast<double>(), positions[triangles[t][1]].cast<double>(),
@@ -208,7 +213,7 @@ Mesh::FoldGuard derive_fold_guard(std::span<const Eigen::Vector3f> positions,
     }
     // Rounded down, so that a float distance below it is below the exact one.
     const float c = float(best);
-    guard.clearance[f] = double(c) > best ? std::nextafter(c, 0.0f) : c;
+    guard.faces[f].clearance = double(c) > best ? std::nextafter(c, 0.0f) : c;
   });
   return guard;
 }

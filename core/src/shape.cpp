@@ -1,7 +1,9 @@
 // Shapes and their ray sources.
 #include "rtcd/shape.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <numbers>
 #include <sstream>
 
@@ -32,13 +34,47 @@ void add_source(RaySources& s, const Eigen::Vector3d& origin, const Eigen::Vecto
   s.directions.push_back(inward.normalized().cast<float>());
 }
 
+// Origins per leaf: a leaf's origins are tested one by one.
+constexpr uint32_t kSourcesPerLeaf = 16;
+
 }  // namespace
+
+void RaySources::index() {
+  nodes.clear();
+  order.resize(origins.size());
+  std::iota(order.begin(), order.end(), 0u);
+  if (origins.empty()) return;
+  nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), 0, uint32_t(origins.size()), 0});
+  // Each node's box, then a split at the median of its longest axis (ties
+  // by index, so the tree is the same on every run).
+  for (size_t i = 0; i < nodes.size(); ++i) {
+    const uint32_t begin = nodes[i].begin, end = nodes[i].end;
+    Eigen::Vector3f lo = origins[order[begin]], hi = lo;
+    for (uint32_t k = begin; k < end; ++k) {
+      lo = lo.cwiseMin(origins[order[k]]);
+      hi = hi.cwiseMax(origins[order[k]]);
+    }
+    nodes[i].lo = lo;
+    nodes[i].hi = hi;
+    if (end - begin <= kSourcesPerLeaf) continue;
+    int axis = 0;
+    (hi - lo).maxCoeff(&axis);
+    const uint32_t mid = begin + (end - begin) / 2;
+    std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](uint32_t a, uint32_t b) {
+      return origins[a][axis] < origins[b][axis] || (origins[a][axis] == origins[b][axis] && a < b);
+    });
+    nodes[i].child = uint32_t(nodes.size());
+    nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), begin, mid, 0});
+    nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), mid, end, 0});
+  }
+}
 
 Shape::Shape(Mesh mesh) : geometry_(std::move(mesh)) {
   const Mesh& m = std::get<Mesh>(geometry_);
   sources_.origins.assign(m.positions().begin(), m.positions().end());
   sources_.directions.reserve(m.vertex_count());
   for (const auto& n : m.vertex_normals()) sources_.directions.push_back(-n);
+  sources_.index();
   bounds_ = m.bounds();
   radius_ = m.radius();
 }
@@ -59,6 +95,7 @@ Shape::Shape(Sphere sphere, double density) : geometry_(sphere) {
     const Eigen::Vector3d u(s * std::cos(phi), s * std::sin(phi), z);
     add_source(sources_, r * u, -u);
   }
+  sources_.index();
   bounds_ = {Eigen::Vector3d::Constant(-r), Eigen::Vector3d::Constant(r)};
   radius_ = r;
 }
@@ -88,6 +125,7 @@ Shape::Shape(Box box, double density) : geometry_(box) {
           }
     }
   }
+  sources_.index();
   bounds_ = {-h, h};
   radius_ = h.norm();
 }

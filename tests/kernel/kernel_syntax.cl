@@ -14,7 +14,7 @@ typedef struct {
   __global const rtcd_uint* triangles;
   __global const rtcd_int* neighbors;
   __global const rtcd_uchar* zero_area;
-  __global const float* clearance;
+  __global const rtcd_fold_face* fold_faces;
   __global const rtcd_uint* ring_first;
   __global const rtcd_int* ring;
 } rtcd_tracer;
@@ -31,8 +31,7 @@ int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 direct
   return rtcd_dot(direction, t->positions[triangle]) > 0.0f;
 }
 int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward, float reach) {
-  return rtcd_fold_free(face, origin, toward, reach, t->positions, t->triangles, t->positions, t->clearance,
-                        t->ring_first, t->ring);
+  return rtcd_fold_free(face, origin, toward, reach, t->positions, t->fold_faces, t->ring_first, t->ring);
 }
 #include "rtcd/kernel/trace.h"
 
@@ -57,7 +56,7 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   t.triangles = triangles;
   t.neighbors = neighbors;
   t.zero_area = zero_area;
-  t.clearance = out;
+  t.fold_faces = (__global const rtcd_fold_face*)out;
   t.ring_first = triangles;
   t.ring = neighbors;
   p.watch_lo = p.watch_hi = ray.origin;

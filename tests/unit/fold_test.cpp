@@ -16,10 +16,10 @@ rtcd_vec3 k(const Eigen::Vector3f& v) { return rtcd_v3(v.x(), v.y(), v.z()); }
 bool fold_free(const rtcd::Mesh& m, int32_t face, const Eigen::Vector3f& origin, const Eigen::Vector3f& toward,
                float reach) {
   const rtcd::Mesh::FoldGuard& g = m.fold_guard();
-  return rtcd_fold_free(face, k(origin), k(toward), reach, reinterpret_cast<const rtcd_vec3*>(m.positions().data()),
-                        reinterpret_cast<const rtcd_uint*>(m.triangles().data()),
-                        reinterpret_cast<const rtcd_vec3*>(m.triangle_normals().data()), g.clearance.data(),
-                        g.ring_first.data(), g.ring.data());
+  return rtcd_fold_free(face, k(origin), k(toward), reach,
+                        reinterpret_cast<const rtcd_vec3*>(m.triangle_normals().data()),
+                        reinterpret_cast<const rtcd_fold_face*>(m.fold_guard().faces.data()), g.ring_first.data(),
+                        g.ring.data());
 }
 
 // Segment ab meets triangle (p0, p1, p2), touching included (double).
@@ -116,8 +116,8 @@ TEST(FoldGuard, SmallFacesFarApartNeedFewCells) {
                       {far, far, far}, {far + size, far, far}, {far, far + size, far}},
                      {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}});
   const rtcd::Mesh::FoldGuard& g = m.fold_guard();
-  ASSERT_EQ(g.clearance.size(), 3u);
-  for (float c : g.clearance) EXPECT_GE(c, 0.0f);
+  ASSERT_EQ(g.faces.size(), 3u);
+  for (const auto& f : g.faces) EXPECT_GE(f.clearance, 0.0f);
   EXPECT_EQ(g.ring.size(), 0u);  // no two share a vertex
 }
 
@@ -128,7 +128,8 @@ TEST(FoldGuard, OnlyZeroAreaTrianglesLeaveNothingToGuard) {
   rtcd::MeshOptions options;
   options.allow_zero_area = true;
   const rtcd::Mesh m({{0, 0, 0}, {0, 0, 0}, {0, 0, 0}, {1, 1, 1}}, {{0, 1, 2}}, options);
-  EXPECT_EQ(m.fold_guard().clearance, std::vector<float>{0.0f});
+  ASSERT_EQ(m.fold_guard().faces.size(), 1u);
+  EXPECT_EQ(m.fold_guard().faces[0].clearance, 0.0f);
   EXPECT_TRUE(m.fold_guard().ring.empty());
 }
 

@@ -84,9 +84,15 @@ class Mesh {
   // side crosses no other face: the ring (the triangles sharing a vertex
   // with f that reach into its inner side) to test by their planes, and the
   // clearance (no other face reaching into f's inner side comes closer to
-  // f; a few triangle sizes at most, the reach of the search).
+  // f; a few triangle sizes at most, the reach of the search). A ring
+  // face is tested by its plane as stored here, so the test reads no vertex.
   struct FoldGuard {
-    std::vector<float> clearance;
+    struct Face {
+      float clearance;
+      float offset;  // n . v0, along the float unit normal of triangle_normals()
+      float size;    // |v0|_1, which sizes the ring test's tolerance
+    };
+    std::vector<Face> faces;
     std::vector<uint32_t> ring_first;  // f's ring: ring[ring_first[f] .. ring_first[f + 1])
     std::vector<int32_t> ring;
   };

@@ -3,6 +3,7 @@
 // sampling of the surface, so any surface can cast rays).
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <variant>
 #include <vector>
@@ -30,11 +31,50 @@ struct Box {
 // counts.
 struct HalfSpace {};
 
-// Ray origins in the shape's local frame, each with its inward unit direction.
+// Ray origins in the shape's local frame, each with its inward unit
+// direction, and a tree of boxes over them: a pair's overlap holds a few of
+// a body's origins, found without testing every one.
 struct RaySources {
   std::vector<Eigen::Vector3f> origins;
   std::vector<Eigen::Vector3f> directions;
+
+  // A balanced binary tree over a permutation of the origins: a node's are
+  // order[begin, end); an inner node's children are nodes[child] and
+  // nodes[child + 1]; child 0 marks a leaf (the root is node 0).
+  struct Node {
+    Eigen::Vector3f lo, hi;
+    uint32_t begin, end, child;
+  };
+  std::vector<Node> nodes;
+  std::vector<uint32_t> order;
+
+  // Builds the tree over the origins; called once they are all in.
+  void index();
+  // Calls visit(v) for every origin v of the leaves reached through nodes
+  // whose box passes may_hold(lo, hi): a test that may pass a box holding
+  // no wanted origin but never fails one holding one. Each origin at most
+  // once, in no particular order.
+  template <class MayHold, class Visit>
+  void visit_leaves(const MayHold& may_hold, const Visit& visit) const;
 };
+
+template <class MayHold, class Visit>
+void RaySources::visit_leaves(const MayHold& may_hold, const Visit& visit) const {
+  if (nodes.empty()) return;
+  uint32_t stack[64];  // depth <= log2(origins) + 1 for median splits
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& n = nodes[stack[--top]];
+    if (!may_hold(n.lo, n.hi)) continue;
+    if (n.child != 0) {
+      stack[top++] = n.child;
+      stack[top++] = n.child + 1;
+      continue;
+    }
+    for (uint32_t k = n.begin; k < n.end; ++k) visit(order[k]);
+  }
+}
 
 class Shape {
  public:
