@@ -141,9 +141,8 @@ class CpuExecutor final : public RayExecutor {
   // A candidate placed in the target's frame (rtcd_place_ray), handed to
   // `take`; none where the origin is outside the job's overlap box.
   template <class Take>
-  void place(const RayJob& job, const rtcd_frame& frame, uint32_t vertex, int32_t start, int32_t entry,
-             const Take& take) const {
-    const RaySources& rs = shapes_[job.source]->sources();
+  static void place(const RaySources& rs, const rtcd_frame& frame, uint32_t vertex, int32_t start, int32_t entry,
+                    const Take& take) {
     rtcd_candidate c{vertex, start, entry, 0, {}, {}};
     if (rtcd_place_ray(&frame, to_kernel(rs.origins[vertex]), to_kernel(rs.directions[vertex]), &c.origin, &c.direction))
       take(c);
@@ -153,8 +152,9 @@ class CpuExecutor final : public RayExecutor {
   template <class Take>
   void for_each_tracked(const RayJob& job, const Take& take) const {
     if (job.overlap.empty()) return;
+    const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
-    for (const TrackedRay& r : job.tracked) place(job, frame, r.vertex, r.triangle, r.entry, take);
+    for (const TrackedRay& r : job.tracked) place(rs, frame, r.vertex, r.triangle, r.entry, take);
   }
 
   // A full job's candidates, in vertex order. Most of a body's vertices lie
@@ -182,7 +182,7 @@ class CpuExecutor final : public RayExecutor {
     rs.visit_leaves(may_hold, [&](uint32_t v) { marks[v / 64] |= uint64_t(1) << (v % 64); });
     for (size_t w = 0; w < marks.size(); ++w)
       for (uint64_t bits = marks[w]; bits != 0; bits &= bits - 1)
-        place(job, frame, uint32_t(64 * w + std::countr_zero(bits)), -1, -1, take);
+        place(rs, frame, uint32_t(64 * w + std::countr_zero(bits)), -1, -1, take);
   }
 
   void trace(const RayJob& job, const rtcd_trace_params& params, const rtcd_candidate& c, RayOutcome& o) const {
