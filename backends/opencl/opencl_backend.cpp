@@ -531,6 +531,17 @@ class OpenClExecutor final : public RayExecutor {
     return job.iterative ? job.tracked.size() : source.sources().origins.size();
   }
 
+  // The rays a job is expected to cast, by which jobs are spread over the
+  // devices: its tracked rays, or the origins near its overlap box (a full
+  // job's device still selects from all its items).
+  static size_t expected_rays(const RayJob& job, const Shape& source) {
+    if (job.overlap.empty()) return 0;
+    if (job.iterative) return job.tracked.size();
+    size_t n = 0;
+    visit_near_origins(job, source.sources(), [&](uint32_t) { ++n; });
+    return n;
+  }
+
   // A job whose tracked rays are on a device walks there; every other job
   // goes to the device with the fewest expected rays so far. So a pair
   // stays where it is from one full step to the next, and may move to
@@ -581,7 +592,7 @@ class OpenClExecutor final : public RayExecutor {
     d.host_first_items.push_back(d.items);
     d.host_frames.push_back(make_frame(job));
     d.items += rtcd_uint(items);
-    d.load += items;
+    d.load += expected_rays(job, *shapes_[job.source]);
     d.keeps = d.keeps || job.residence;
   }
 

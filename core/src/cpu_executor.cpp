@@ -157,29 +157,16 @@ class CpuExecutor final : public RayExecutor {
     for (const TrackedRay& r : job.tracked) place(rs, frame, r.vertex, r.triangle, r.entry, take);
   }
 
-  // A full job's candidates, in vertex order. Most of a body's vertices lie
-  // far from the candidate box: the source's tree of origins turns them
-  // away by whole boxes, each placed in the target's frame as the box
-  // around it (in double, grown well past rounding, so a superset), before
-  // the exact placement decides. `marks` put the vertices found back in
-  // vertex order.
+  // A full job's candidates, in vertex order: the origins near the overlap
+  // box (visit_near_origins), which `marks` put back in vertex order, then
+  // the exact placement decides.
   template <class Take>
   void for_each_selected(const RayJob& job, std::vector<uint64_t>& marks, const Take& take) const {
     if (job.overlap.empty()) return;
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
-    const Eigen::Matrix3d& rotation = job.rotation;
-    const Eigen::Matrix3d spread = rotation.cwiseAbs();
-    const double scale = 1.0 + job.translation.norm() + job.overlap.min.cwiseAbs().maxCoeff() +
-                         job.overlap.max.cwiseAbs().maxCoeff();
-    const Aabb box = job.overlap.grown(1e-9 * scale);
-    auto may_hold = [&](const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
-      const Eigen::Vector3d centre = rotation * (0.5 * (lo.cast<double>() + hi.cast<double>())) + job.translation;
-      const Eigen::Vector3d half = spread * (0.5 * (hi.cast<double>() - lo.cast<double>()));
-      return ((centre + half).array() >= box.min.array()).all() && ((centre - half).array() <= box.max.array()).all();
-    };
     marks.assign((rs.origins.size() + 63) / 64, 0);
-    rs.visit_leaves(may_hold, [&](uint32_t v) { marks[v / 64] |= uint64_t(1) << (v % 64); });
+    visit_near_origins(job, rs, [&](uint32_t v) { marks[v / 64] |= uint64_t(1) << (v % 64); });
     for (size_t w = 0; w < marks.size(); ++w)
       for (uint64_t bits = marks[w]; bits != 0; bits &= bits - 1)
         place(rs, frame, uint32_t(64 * w + std::countr_zero(bits)), -1, -1, take);

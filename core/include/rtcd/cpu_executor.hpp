@@ -44,4 +44,27 @@ std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory
 rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, const Config& config);
 rtcd_frame make_frame(const RayJob& job);
 
+// Calls visit(v) for each origin of the job's source that may lie in the
+// job's overlap box: every origin of a leaf of the source's tree whose box,
+// placed in the target's frame as the box around it (in double, grown well
+// past rounding), meets the overlap box. So a superset of the candidates
+// rtcd_place_ray takes, found by whole boxes: most of a body's origins lie
+// far from the overlap and are turned away without being placed. Each
+// origin at most once, in no particular order.
+template <class Visit>
+void visit_near_origins(const RayJob& job, const RaySources& sources, const Visit& visit) {
+  if (job.overlap.empty()) return;
+  const Eigen::Matrix3d& rotation = job.rotation;
+  const Eigen::Matrix3d spread = rotation.cwiseAbs();
+  const double scale =
+      1.0 + job.translation.norm() + job.overlap.min.cwiseAbs().maxCoeff() + job.overlap.max.cwiseAbs().maxCoeff();
+  const Aabb box = job.overlap.grown(1e-9 * scale);
+  auto may_hold = [&](const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+    const Eigen::Vector3d centre = rotation * (0.5 * (lo.cast<double>() + hi.cast<double>())) + job.translation;
+    const Eigen::Vector3d half = spread * (0.5 * (hi.cast<double>() - lo.cast<double>()));
+    return ((centre + half).array() >= box.min.array()).all() && ((centre - half).array() <= box.max.array()).all();
+  };
+  sources.visit_leaves(may_hold, visit);
+}
+
 }  // namespace rtcd
