@@ -816,38 +816,48 @@ class OpenClExecutor final : public RayExecutor {
     for (const Device& d : devices_) work = work || d.items > 0;
     batches_ += work;
     const bool inject_mid_step = fault_ == OpenClFault::mid_step && batches_ == 2;
+    // Each device's thread also hands its jobs' outcomes to their slots
+    // (disjoint ones): the step keeps job order, and no copy waits for the
+    // slowest device.
+    auto run_device = [&](uint32_t i) {
+      run_on(devices_[i], inject_mid_step);
+      deliver(i, jobs, outcomes);
+    };
     if (devices_.size() == 1) {
-      run_on(devices_[0], inject_mid_step);
+      run_device(0);
     } else {
       tbb::parallel_for(
           tbb::blocked_range<size_t>(0, devices_.size(), 1),
           [&](const tbb::blocked_range<size_t>& r) {
-            for (size_t i = r.begin(); i != r.end(); ++i) run_on(devices_[i], inject_mid_step);
+            for (size_t i = r.begin(); i != r.end(); ++i) run_device(uint32_t(i));
           },
           tbb::simple_partitioner());
     }
-    // Each job's outcomes into its own slot: the step keeps job order. And
-    // where its kept rays are, for the next step.
     Transfers moved;
-    for (uint32_t i = 0; i < devices_.size(); ++i) {
-      Device& d = devices_[i];
-      for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
-        const RayJob& job = jobs[d.batch_jobs[l]];
-        std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
-        if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
-          if (job.residence && runtime_->place_on_device) *job.residence = {step_, i, 0};
-          out.clear();
-          continue;
-        }
-        if (job.residence && runtime_->place_on_device)
-          *job.residence = {step_, i, d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l])};
-        const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
-        out.assign(first, first + d.host_counts[l]);
-      }
+    for (const Device& d : devices_) {
       moved.to_device += d.moved.to_device;
       moved.from_device += d.moved.from_device;
     }
     return moved;
+  }
+
+  // Device i's jobs' outcomes into their slots, and where their kept rays
+  // are, for the next step.
+  void deliver(uint32_t i, std::span<const RayJob> jobs, std::span<std::vector<RayOutcome>> outcomes) const {
+    const Device& d = devices_[i];
+    for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
+      const RayJob& job = jobs[d.batch_jobs[l]];
+      std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
+      if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
+        if (job.residence && runtime_->place_on_device) *job.residence = {step_, i, 0};
+        out.clear();
+        continue;
+      }
+      if (job.residence && runtime_->place_on_device)
+        *job.residence = {step_, i, d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l])};
+      const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
+      out.assign(first, first + d.host_counts[l]);
+    }
   }
 
   std::string name_;
