@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
-#include <set>
+#include <map>
 #include <sstream>
 #include <vector>
 
@@ -151,25 +151,37 @@ MeshData read_obj(const std::filesystem::path& path) {
   return data;
 }
 
+// The size in bytes of a PLY scalar type, 0 for an unknown one.
+int ply_type_size(const std::string& type) {
+  static const std::map<std::string, int> sizes = {
+      {"char", 1},  {"uchar", 1},  {"int8", 1},  {"uint8", 1},  {"short", 2},   {"ushort", 2},  {"int16", 2},  {"uint16", 2},
+      {"int", 4},   {"uint", 4},   {"int32", 4}, {"uint32", 4}, {"float", 4},   {"float32", 4}, {"double", 8}, {"float64", 8}};
+  const auto it = sizes.find(type);
+  return it == sizes.end() ? 0 : it->second;
+}
+
 // The vertex count a PLY file declares. The header is checked line by line,
-// and an ASCII body line by line against it, before assimp reads the file:
-// assimp 5.2 loops forever on a header that does not end, corrupts its heap
-// on a malformed one (an unknown keyword or property type, an element
-// declared twice), and allocates whatever count a body's list states.
+// and the body against it (an ASCII body line by line, a binary one by its
+// sizes), before assimp reads the file: assimp 5.2 loops forever on a
+// header that does not end or a body shorter than its counts, corrupts its
+// heap on a malformed header (an unknown keyword or property type, an
+// element declared twice), and allocates whatever count a body's list
+// states.
 size_t ply_vertex_count(const std::filesystem::path& path) {
-  static const std::set<std::string> types = {"char",  "uchar",  "short", "ushort", "int",    "uint",
-                                              "float", "double", "int8",  "uint8",  "int16",  "uint16",
-                                              "int32", "uint32", "float32", "float64"};
+  struct Property {
+    int size = 0;        // bytes of a value
+    int count_size = 0;  // lists: bytes of the count before the values; 0: a scalar
+  };
   struct Element {
     std::string name;
     long long count = 0;
-    std::vector<bool> lists;  // per property: a list (a count, then that many values)
+    std::vector<Property> properties;
   };
   std::ifstream in(path, std::ios::binary);
   if (!in) file_error(path, "cannot open");
   std::string line;
   long long vertices = -1;
-  bool ascii = false;
+  std::string format;
   std::vector<Element> elements;
   size_t n = 0;
   auto bad = [&](const std::string& part, const std::string& why) {
@@ -188,12 +200,15 @@ size_t ply_vertex_count(const std::filesystem::path& path) {
     if (n == 1) {
       if (line != "ply") bad("header", "expected \"ply\"");
     } else if (keyword == "end_header") {
+      // A binary body starts right after this line; assimp reads a line
+      // that goes on past the keyword otherwise than this check does.
+      if (line != "end_header") bad("header", "end_header must stand alone on its line");
       if (vertices < 0) file_error(path, "PLY header declares no vertex element");
       header = false;
     } else if (keyword == "format") {
-      std::string format;
       words >> format;
-      ascii = format == "ascii";
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+        bad("header", "unknown format (expected ascii, binary_little_endian or binary_big_endian)");
     } else if (keyword == "element") {
       Element e;
       if (!(words >> e.name >> e.count) || e.count < 0) bad("header", "expected \"element <name> <count>\"");
@@ -206,15 +221,45 @@ size_t ply_vertex_count(const std::filesystem::path& path) {
       std::string type, count_type, name;
       words >> type;
       if (type == "list") words >> count_type >> type;
-      if (!types.count(type) || (!count_type.empty() && !types.count(count_type)))
+      Property p{ply_type_size(type), count_type.empty() ? 0 : ply_type_size(count_type)};
+      if (p.size == 0 || (!count_type.empty() && p.count_size == 0))
         bad("header", "unknown property type (expected char, uchar, short, ushort, int, uint, float or double)");
+      if (count_type == "float" || count_type == "float32" || count_type == "double" || count_type == "float64")
+        bad("header", "a list count of a floating-point type");
       if (!(words >> name)) bad("header", "a property without a name");
-      elements.back().lists.push_back(!count_type.empty());
+      elements.back().properties.push_back(p);
     } else if (keyword != "comment" && keyword != "obj_info") {
       bad("header", "unknown header keyword \"" + keyword + "\"");
     }
   }
-  if (!ascii) return size_t(vertices);
+  if (format.empty()) file_error(path, "PLY header has no format line");
+  if (format != "ascii") {
+    // Element by element through the bytes, each list by its count.
+    const std::string body{std::istreambuf_iterator<char>(in), {}};
+    const bool big = format == "binary_big_endian";
+    size_t at = 0;
+    for (const Element& e : elements)
+      for (long long i = 0; i < e.count; ++i)
+        for (const Property& p : e.properties) {
+          auto short_body = [&] {
+            file_error(path, "PLY body ends at " + e.name + " " + std::to_string(i) + " of " + std::to_string(e.count));
+          };
+          long long values = 1;
+          if (p.count_size > 0) {
+            if (body.size() - at < size_t(p.count_size)) short_body();
+            uint64_t count = 0;
+            for (int b = 0; b < p.count_size; ++b) {
+              const uint64_t byte = static_cast<unsigned char>(body[at + size_t(big ? b : p.count_size - 1 - b)]);
+              count = (count << 8) | byte;
+            }
+            at += size_t(p.count_size);
+            values = (long long)count;  // a signed count's negative values read as huge ones, which the body cannot hold
+          }
+          if (uint64_t(values) > (body.size() - at) / uint64_t(p.size)) short_body();
+          at += size_t(values) * size_t(p.size);
+        }
+    return size_t(vertices);
+  }
   // One element per line, its values as the header lays them out.
   for (const Element& e : elements)
     for (long long i = 0; i < e.count; ++i) {
@@ -224,14 +269,14 @@ size_t ply_vertex_count(const std::filesystem::path& path) {
       std::istringstream words(line);
       const std::vector<std::string> values{std::istream_iterator<std::string>(words), {}};
       size_t k = 0;
-      for (bool list : e.lists) {
+      for (const Property& p : e.properties) {
         if (k >= values.size()) bad("body", "fewer values than the header's " + e.name + " properties");
         long long count = -1;
         const std::string& v = values[k];
-        if (list && (std::from_chars(v.data(), v.data() + v.size(), count).ptr != v.data() + v.size() || count < 0 ||
-                     size_t(count) >= values.size() - k))
+        if (p.count_size > 0 && (std::from_chars(v.data(), v.data() + v.size(), count).ptr != v.data() + v.size() ||
+                                 count < 0 || size_t(count) >= values.size() - k))
           bad("body", "list count \"" + v.substr(0, 20) + "\" is not the number of values that follow it");
-        k += list ? 1 + size_t(count) : 1;
+        k += p.count_size > 0 ? 1 + size_t(count) : 1;
       }
       if (k != values.size()) bad("body", "more values than the header's " + e.name + " properties");
     }

@@ -238,6 +238,45 @@ TEST_F(MeshFiles, PlyHeaderIsCheckedLineByLine) {
                     "element \"vertex\" is declared twice");
   expect_file_error(write("word.ply", "ply\nformat ascii 1.0\nelement vertex 1\npropertii 1.0\n" + tail),
                     "unknown header keyword \"propertii\"");
+  expect_file_error(write("format.ply", "ply\nformat binary 1.0\nelement vertex 1\nproperty float x\n" + tail),
+                    "unknown format");
+  // assimp ends this line at the vertical tab and then seeks forever (mesh_file fuzzer).
+  expect_file_error(write("vt.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1\nproperty float x\n"
+                                    "property float y\nproperty float z\nend_header\v\n"),
+                    "end_header must stand alone on its line");
+}
+
+TEST_F(MeshFiles, PlyBinaryBodyIsCheckedAgainstItsHeader) {
+  // assimp loops until its counts are read, however few bytes follow: a
+  // body shorter than its header states is refused first (mesh_file fuzzer).
+  auto ply = [](const std::string& faces, bool big) {
+    std::string text = "ply\nformat binary_" + std::string(big ? "big" : "little") +
+                       "_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                       "element face " + faces + "\nproperty list uchar int vertex_indices\nend_header\n";
+    const float xyz[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+    auto put = [&](const void* p, size_t n) {
+      std::string bytes(static_cast<const char*>(p), n);
+      if (big) std::reverse(bytes.begin(), bytes.end());  // this machine is little-endian
+      text += bytes;
+    };
+    for (const float& v : xyz) put(&v, 4);
+    text += '\3';
+    for (int32_t i = 0; i < 3; ++i) put(&i, 4);
+    return text;
+  };
+  for (const bool big : {false, true}) {
+    SCOPED_TRACE(big ? "big-endian" : "little-endian");
+    const rtcd::MeshData data = rtcd::read_mesh_file(write("ok.ply", ply("1", big)));
+    EXPECT_EQ(data.positions.size(), 3u);
+    EXPECT_EQ(data.triangles.size(), 1u);
+    expect_file_error(write("faces.ply", ply("999999999", big)), "PLY body ends at face 1 of 999999999");
+    std::string cut = ply("1", big);
+    cut.resize(cut.size() - 5);  // the list's count is there, its values are not
+    expect_file_error(write("cut.ply", cut), "PLY body ends at face 0 of 1");
+    std::string huge = ply("1", big);
+    huge[huge.size() - 13] = '\xff';  // a list of 255 indices in 12 bytes
+    expect_file_error(write("count.ply", huge), "PLY body ends at face 0 of 1");
+  }
 }
 
 TEST_F(MeshFiles, PlyAsciiBodyIsCheckedAgainstItsHeader) {
