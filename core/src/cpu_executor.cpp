@@ -72,8 +72,11 @@ float float_at_most(double x) {
 constexpr size_t kChunk = 128;
 constexpr size_t kParallelItems = 512;
 constexpr size_t kParallelTraces = 64;
-// Full jobs selected per parallel task, which keeps its own vertex marks.
+// Full jobs selected per parallel task, which keeps its own vertex marks;
+// the least blocks of a batch that are spread over threads whole (fewer are
+// split into chunks of rays).
 constexpr size_t kJobsPerBlock = 16;
+constexpr size_t kTracedBlocks = 8;
 
 class CpuExecutor final : public RayExecutor {
  public:
@@ -102,11 +105,24 @@ class CpuExecutor final : public RayExecutor {
       });
       return {};  // the rays run where they are
     }
-    // Traced rays cost far more and vary: select per job (in fixed blocks
-    // of jobs, each with its own marks, kept across steps), then spread the
-    // batch's rays over threads in fixed chunks.
+    // Full jobs select their candidates in fixed blocks of jobs, each block
+    // with its own marks, kept across steps.
     const size_t blocks = (jobs.size() + kJobsPerBlock - 1) / kJobsPerBlock;
     if (marks_.size() < blocks) marks_.resize(blocks);
+    if (blocks >= kTracedBlocks) {
+      // Enough blocks to keep every thread busy: each traces its rays as it
+      // selects them, so no candidate list leaves the cache.
+      for_each_index(blocks, true, [&](size_t b) {
+        for (size_t j = b * kJobsPerBlock; j < std::min(jobs.size(), (b + 1) * kJobsPerBlock); ++j) {
+          params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
+          outcomes[j].clear();
+          for_each_selected(jobs[j], marks_[b], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
+        }
+      });
+      return {};
+    }
+    // Few jobs, whose rays cost far more than their selection and vary:
+    // select first, then spread the rays over threads in fixed chunks.
     for_each_index(blocks, work >= kParallelItems, [&](size_t b) {
       for (size_t j = b * kJobsPerBlock; j < std::min(jobs.size(), (b + 1) * kJobsPerBlock); ++j) {
         params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
