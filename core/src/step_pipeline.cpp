@@ -223,7 +223,8 @@ void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
     if (p.a == p.b) throw UsageError(pair_text(p.a, p.b) + " is one body");
     keys_.push_back({pair_key(p.a, p.b), uint32_t(keys_.size())});
   }
-  std::sort(keys_.begin(), keys_.end());
+  // Broad phases usually list their pairs sorted already.
+  if (!std::is_sorted(keys_.begin(), keys_.end())) std::sort(keys_.begin(), keys_.end());
   const auto twice =
       std::adjacent_find(keys_.begin(), keys_.end(), [](const auto& x, const auto& y) { return x.first == y.first; });
   if (twice != keys_.end())
