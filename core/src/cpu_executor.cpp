@@ -73,8 +73,8 @@ constexpr size_t kChunk = 128;
 constexpr size_t kParallelItems = 512;
 constexpr size_t kParallelTraces = 64;
 // Full jobs selected per parallel task, which keeps its own vertex marks;
-// the least blocks of a batch that are spread over threads whole (fewer are
-// split into chunks of rays).
+// the least blocks of a batch that trace their rays as they select them
+// (fewer are split into chunks of rays).
 constexpr size_t kJobsPerBlock = 16;
 constexpr size_t kTracedBlocks = 8;
 
@@ -106,31 +106,30 @@ class CpuExecutor final : public RayExecutor {
       return {};  // the rays run where they are
     }
     // Full jobs select their candidates in fixed blocks of jobs, each block
-    // with its own marks, kept across steps.
+    // with its own marks, kept across steps. With enough blocks to keep
+    // every thread busy, each candidate is traced as soon as it is selected,
+    // so no candidate list leaves the cache; fewer jobs, whose rays cost far
+    // more than their selection and vary, list their candidates first and
+    // spread the rays over threads in chunks.
     const size_t blocks = (jobs.size() + kJobsPerBlock - 1) / kJobsPerBlock;
     if (marks_.size() < blocks) marks_.resize(blocks);
-    if (blocks >= kTracedBlocks) {
-      // Enough blocks to keep every thread busy: each traces its rays as it
-      // selects them, so no candidate list leaves the cache.
-      for_each_index(blocks, true, [&](size_t b) {
-        for (size_t j = b * kJobsPerBlock; j < std::min(jobs.size(), (b + 1) * kJobsPerBlock); ++j) {
-          params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
-          outcomes[j].clear();
-          for_each_selected(jobs[j], marks_[b], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
-        }
-      });
-      return {};
-    }
-    // Few jobs, whose rays cost far more than their selection and vary:
-    // select first, then spread the rays over threads in fixed chunks.
+    const bool at_once = blocks >= kTracedBlocks;
     for_each_index(blocks, work >= kParallelItems, [&](size_t b) {
       for (size_t j = b * kJobsPerBlock; j < std::min(jobs.size(), (b + 1) * kJobsPerBlock); ++j) {
         params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
+        outcomes[j].clear();
         candidates_[j].clear();
-        for_each_selected(jobs[j], marks_[b], [&](const rtcd_candidate& c) { candidates_[j].push_back(c); });
-        outcomes[j].resize(candidates_[j].size());
+        for_each_selected(jobs[j], marks_[b], [&](const rtcd_candidate& c) {
+          if (at_once) {
+            trace(jobs[j], params_[j], c, outcomes[j].emplace_back());
+          } else {
+            candidates_[j].push_back(c);
+          }
+        });
+        if (!at_once) outcomes[j].resize(candidates_[j].size());
       }
     });
+    if (at_once) return {};
     // Chunks small enough to spread even a one-pair step over the threads;
     // each ray writes its own slot, so the split never changes a result.
     size_t rays = 0;

@@ -345,6 +345,43 @@ TEST_P(Conformance, SameContactsBitForBitAcrossThreadCounts) {
   }
 }
 
+// A step of many pairs gives each pair what a step of that pair alone
+// gives: a large batch may trace its rays another way than a small one (the
+// CPU executor traces them as it selects them, block by block).
+TEST_P(Conformance, SameContactsInABatchAsAlone) {
+  auto blob_a = shape(gen::concave_blob(902, 1));
+  auto blob_b = shape(gen::concave_blob(902, 2));
+  Config full;
+  full.mode = Mode::full;
+  auto narrow = make_narrow_phase(GetParam(), full);
+  const ShapeId sa = narrow->add_shape(blob_a), sb = narrow->add_shape(blob_b);
+  std::mt19937 g(7);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<BodyPair> pairs;
+  for (int i = 0; i < 64; ++i) {  // 128 jobs: 8 blocks of 16
+    const Pose a = at(Eigen::Vector3d(10.0 * i, 0, 0), Eigen::Quaterniond(1, u(g), u(g), u(g)).normalized());
+    const Pose b = at(a.position + 1.3 * Eigen::Vector3d(u(g), u(g), u(g)).normalized(),
+                      Eigen::Quaterniond(1, u(g), u(g), u(g)).normalized());
+    pairs.push_back({narrow->add_body(sa, a), narrow->add_body(sb, b)});
+  }
+  const StepResult batch = narrow->detect(pairs);
+  size_t contacts = 0;
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const StepResult alone = narrow->detect(std::span(&pairs[i], 1));
+    const PairResult& p = batch.pairs[i];
+    ASSERT_EQ(p.contact_count, alone.contacts.size()) << "pair " << i;
+    ASSERT_EQ(p.predictive_count, alone.predictive.size()) << "pair " << i;
+    const auto mine = batch.contacts_of(p);
+    for (size_t k = 0; k < mine.size(); ++k) {
+      EXPECT_EQ(mine[k].vertex, alone.contacts[k].vertex);
+      EXPECT_EQ(mine[k].triangle, alone.contacts[k].triangle);
+      EXPECT_EQ(mine[k].depth, alone.contacts[k].depth);
+    }
+    contacts += mine.size();
+  }
+  EXPECT_GT(contacts, 500u) << "too few contacts: the comparison would be vacuous";
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(usable_backends()),
                          [](const auto& info) { return test_name(info.param); });
 
