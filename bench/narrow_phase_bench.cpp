@@ -10,26 +10,11 @@
 
 #include <benchmark/benchmark.h>
 
-#include "rtcd/mesh_gen.hpp"
-#include "rtcd/narrow_phase.hpp"
+#include "bench_scene.hpp"
 
 namespace {
 
 using namespace rtcd;
-
-// B's offset along x from A at which the two blobs rest with a shallow overlap.
-double resting_offset(const std::shared_ptr<const Shape>& a, const std::shared_ptr<const Shape>& b) {
-  auto narrow = make_narrow_phase("embree");
-  const ShapeId sa = narrow->add_shape(a), sb = narrow->add_shape(b);
-  const BodyPair pair{narrow->add_body(sa, {}), narrow->add_body(sb, {})};
-  for (double x = 3.0; x > 0.5; x -= 0.005) {
-    Pose p;
-    p.position = {x, 0.1, 0.05};
-    narrow->set_pose(pair.b, p);
-    if (narrow->detect(std::span(&pair, 1)).contacts.size() >= 20) return x;
-  }
-  return 1.5;
-}
 
 struct Scene {
   std::unique_ptr<NarrowPhase> narrow;
@@ -39,18 +24,16 @@ struct Scene {
 
 // `count` copies of the resting pair, 10 units apart so pairs never mix.
 Scene make_scene(const std::string& backend, Mode mode, int count, bool verify_walks) {
-  static const auto a = std::make_shared<Shape>(gen::concave_blob(902, 1));
-  static const auto b = std::make_shared<Shape>(gen::concave_blob(902, 2));
-  static const double offset = resting_offset(a, b);
+  const bench::RestingPair& pair = bench::resting_pair();
   Config config;
   config.mode = mode;
   config.verify_walks = verify_walks;
   Scene s{make_narrow_phase(backend, config), {}, {}};
-  const ShapeId sa = s.narrow->add_shape(a), sb = s.narrow->add_shape(b);
+  const ShapeId sa = s.narrow->add_shape(pair.a), sb = s.narrow->add_shape(pair.b);
   for (int i = 0; i < count; ++i) {
     Pose pa, pb;
     pa.position = {10.0 * i, 0, 0};
-    pb.position = {10.0 * i + offset, 0.1, 0.05};
+    pb.position = pair.b_offset + Eigen::Vector3d(10.0 * i, 0, 0);
     s.pairs.push_back({s.narrow->add_body(sa, pa), s.narrow->add_body(sb, pb)});
     s.b_poses.push_back(pb);
   }
