@@ -418,18 +418,18 @@ class OpenClExecutor final : public RayExecutor {
     for (Device& d : devices_) d.kept_used[step_ % 2] = 0;
   }
 
-  Transfers execute(std::span<const RayJob> jobs, const Config& config,
-                    std::span<std::vector<RayOutcome>> outcomes) override {
+  Transfers execute(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
+                    std::span<RayTally> tallies) override {
     if (fault_message_.empty()) {
       try {
-        return run(jobs, config, outcomes);
+        return run(jobs, config, outcomes, tallies);
       } catch (const cl::Error& e) {
         fail(describe(e) + " during a step");
       } catch (const Error& e) {
         fail(e.what());
       }
     }
-    return cpu().execute(jobs, config, outcomes);
+    return cpu().execute(jobs, config, outcomes, tallies);
   }
 
  private:
@@ -808,7 +808,8 @@ class OpenClExecutor final : public RayExecutor {
     d.outcomes_read.wait();
   }
 
-  Transfers run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes) {
+  Transfers run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
+                std::span<RayTally> tallies) {
     assign(jobs, config);
     // The injected mid-step fault strikes the second batch with work, after
     // its first kernels were enqueued.
@@ -821,7 +822,7 @@ class OpenClExecutor final : public RayExecutor {
     // slowest device.
     auto run_device = [&](uint32_t i) {
       run_on(devices_[i], inject_mid_step);
-      deliver(i, jobs, outcomes);
+      deliver(i, jobs, outcomes, tallies);
     };
     if (devices_.size() == 1) {
       run_device(0);
@@ -841,9 +842,10 @@ class OpenClExecutor final : public RayExecutor {
     return moved;
   }
 
-  // Device i's jobs' outcomes into their slots, and where their kept rays
-  // are, for the next step.
-  void deliver(uint32_t i, std::span<const RayJob> jobs, std::span<std::vector<RayOutcome>> outcomes) const {
+  // Device i's jobs' outcomes into their slots, settled, and where their
+  // kept rays are, for the next step.
+  void deliver(uint32_t i, std::span<const RayJob> jobs, std::span<std::vector<RayOutcome>> outcomes,
+               std::span<RayTally> tallies) const {
     const Device& d = devices_[i];
     for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
       const RayJob& job = jobs[d.batch_jobs[l]];
@@ -851,12 +853,13 @@ class OpenClExecutor final : public RayExecutor {
       if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
         if (job.residence && runtime_->place_on_device) *job.residence = {step_, i, 0};
         out.clear();
-        continue;
+      } else {
+        if (job.residence && runtime_->place_on_device)
+          *job.residence = {step_, i, d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l])};
+        const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
+        out.assign(first, first + d.host_counts[l]);
       }
-      if (job.residence && runtime_->place_on_device)
-        *job.residence = {step_, i, d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l])};
-      const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
-      out.assign(first, first + d.host_counts[l]);
+      tallies[d.batch_jobs[l]] = settle_outcomes(out, job.iterative);
     }
   }
 

@@ -88,8 +88,8 @@ class CpuExecutor final : public RayExecutor {
     shapes_.push_back(std::move(shape));
   }
 
-  Transfers execute(std::span<const RayJob> jobs, const Config& config,
-                    std::span<std::vector<RayOutcome>> outcomes) override {
+  Transfers execute(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
+                    std::span<RayTally> tallies) override {
     if (candidates_.size() < jobs.size()) candidates_.resize(jobs.size());
     if (params_.size() < jobs.size()) params_.resize(jobs.size());
     size_t work = 0;
@@ -102,6 +102,7 @@ class CpuExecutor final : public RayExecutor {
         params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
         outcomes[j].clear();
         for_each_tracked(jobs[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
+        tallies[j] = settle_outcomes(outcomes[j], true);
       });
       return {};  // the rays run where they are
     }
@@ -126,7 +127,11 @@ class CpuExecutor final : public RayExecutor {
             candidates_[j].push_back(c);
           }
         });
-        if (!at_once) outcomes[j].resize(candidates_[j].size());
+        if (at_once) {
+          tallies[j] = settle_outcomes(outcomes[j], false);
+        } else {
+          outcomes[j].resize(candidates_[j].size());
+        }
       }
     });
     if (at_once) return {};
@@ -145,6 +150,7 @@ class CpuExecutor final : public RayExecutor {
       for (uint32_t k = chunk.begin; k < chunk.end; ++k)
         trace(jobs[chunk.job], params_[chunk.job], candidates_[chunk.job][k], outcomes[chunk.job][k]);
     });
+    for (size_t j = 0; j < jobs.size(); ++j) tallies[j] = settle_outcomes(outcomes[j], false);
     return {};
   }
 

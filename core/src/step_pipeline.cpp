@@ -22,10 +22,8 @@ uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(std::min(a, b)) << 32) 
 
 std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) + ", " + std::to_string(b) + ")"; }
 
-// Least outcomes worth counting, and worth turning into records, on several
-// threads: counting is a few additions per outcome, a record dozens of flops.
-constexpr size_t kParallelCount = 16384;
-// Least pairs worth placing (transforms and boxes) on several threads.
+// Least pairs worth placing (transforms and boxes) on several threads; least
+// kept outcomes worth turning into records (dozens of flops each) on several.
 constexpr size_t kParallelPairs = 1024;
 constexpr size_t kParallelFill = 1024;
 
@@ -86,33 +84,6 @@ struct ShapeEntry {
     Eigen::Vector3d n = Eigen::Vector3d::Zero();
     n[face / 2] = face % 2 == 0 ? 1.0 : -1.0;
     return n;
-  }
-};
-
-// Counts of one pair's outcomes: its ranges in the step's output and its
-// share of the statistics.
-struct PairTally {
-  size_t contacts = 0, predictive = 0;
-  size_t candidates = 0, rays_full = 0, rays_predictive = 0, rays_iterative = 0, walk_steps = 0;
-  size_t nearest_queries = 0, rays_retraced = 0, rays_watched = 0, fold_casts = 0;
-  std::array<size_t, RTCD_LINE_STATUS_COUNT> endings{};
-
-  void count(const RayOutcome& o, bool iterative) {
-    ++candidates;
-    contacts += o.kind == RTCD_RAY_PENETRATING;
-    predictive += o.kind == RTCD_RAY_PREDICTIVE;
-    rays_watched += o.kind == RTCD_RAY_WATCHED;
-    rays_predictive += o.predictive_cast;
-    nearest_queries += o.nearest_query;
-    rays_retraced += o.retraced;
-    fold_casts += o.fold_cast;
-    if (iterative) {
-      ++rays_iterative;
-      walk_steps += o.walk_steps;
-      ++endings[o.status];
-    } else {
-      ++rays_full;
-    }
   }
 };
 
@@ -181,7 +152,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     bool fresh;
     PairLimits limits;
     uint32_t list, first;
-    PairTally tally;
+    RayTally tally;
   };
 
   Body& body_at(BodyId id) {
@@ -212,6 +183,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::vector<std::pair<uint64_t, uint32_t>> keys_;  // the step's pair keys with their indices, ascending
   std::vector<RayJob> jobs_[2];
   std::vector<std::vector<RayOutcome>> outcomes_[2];
+  std::vector<RayTally> tallies_[2];
   std::vector<PairWork> work_;
 };
 
@@ -248,7 +220,8 @@ void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& ou
   executor_->begin_step();
   for (uint32_t list : {0u, 1u}) {
     if (outcomes_[list].size() < jobs_[list].size()) outcomes_[list].resize(jobs_[list].size());
-    const Transfers moved = executor_->execute(jobs_[list], config_, outcomes_[list]);
+    if (tallies_[list].size() < jobs_[list].size()) tallies_[list].resize(jobs_[list].size());
+    const Transfers moved = executor_->execute(jobs_[list], config_, outcomes_[list], tallies_[list]);
     out.stats.bytes_to_device += moved.to_device;
     out.stats.bytes_from_device += moved.from_device;
     (list == 1 ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
@@ -375,22 +348,20 @@ void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const
 }
 
 // Ranges per pair in input order (a's rays, then b's), then every record
-// filled in parallel and the tracked rays mirrored from the outcomes.
+// filled in parallel and the tracked rays mirrored from the kept outcomes.
 void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& out) {
   size_t outcomes = 0;
-  for (uint32_t list : {0u, 1u})
-    for (size_t j = 0; j < jobs_[list].size(); ++j) outcomes += outcomes_[list][j].size();
-  for_each_index(pairs.size(), outcomes >= kParallelCount, [&](size_t i) {
+  for (size_t i = 0; i < pairs.size(); ++i) {
     PairWork& w = work_[i];
-    w.tally = {};
-    for (uint32_t k = 0; k < 2; ++k)
-      for (const RayOutcome& o : outcomes_[w.list][w.first + k]) w.tally.count(o, w.list == 1);
-  });
+    w.tally = tallies_[w.list][w.first];
+    w.tally += tallies_[w.list][w.first + 1];
+    outcomes += outcomes_[w.list][w.first].size() + outcomes_[w.list][w.first + 1].size();
+  }
 
   size_t contacts = 0, predictive = 0;
   StepStats& s = out.stats;
   for (size_t i = 0; i < pairs.size(); ++i) {
-    const PairTally& t = work_[i].tally;
+    const RayTally& t = work_[i].tally;
     PairResult& pr = out.pairs[i];
     pr.first_contact = contacts;
     pr.contact_count = t.contacts;
@@ -439,7 +410,6 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
   const Eigen::Matrix3d target_rotation = dst.pose.orientation.toRotationMatrix();
   tracked.clear();
   for (const RayOutcome& o : outcomes) {
-    if (o.kind == RTCD_RAY_DROPPED) continue;
     tracked.push_back({o.vertex, o.triangle, o.entry});
     if (o.kind == RTCD_RAY_WATCHED) continue;
     const Eigen::Vector3d origin = source.shape->sources().origins[o.vertex].cast<double>();
@@ -472,6 +442,56 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
 }
 
 }  // namespace
+
+void RayTally::count(const RayOutcome& o, bool iterative) {
+  ++candidates;
+  contacts += o.kind == RTCD_RAY_PENETRATING;
+  predictive += o.kind == RTCD_RAY_PREDICTIVE;
+  rays_watched += o.kind == RTCD_RAY_WATCHED;
+  rays_predictive += o.predictive_cast;
+  nearest_queries += o.nearest_query;
+  rays_retraced += o.retraced;
+  fold_casts += o.fold_cast;
+  if (iterative) {
+    ++rays_iterative;
+    walk_steps += o.walk_steps;
+    ++endings[o.status];
+  } else {
+    ++rays_full;
+  }
+}
+
+RayTally& RayTally::operator+=(const RayTally& o) {
+  contacts += o.contacts;
+  predictive += o.predictive;
+  candidates += o.candidates;
+  rays_full += o.rays_full;
+  rays_predictive += o.rays_predictive;
+  rays_iterative += o.rays_iterative;
+  walk_steps += o.walk_steps;
+  nearest_queries += o.nearest_queries;
+  rays_retraced += o.rays_retraced;
+  rays_watched += o.rays_watched;
+  fold_casts += o.fold_casts;
+  for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) endings[e] += o.endings[e];
+  return *this;
+}
+
+RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative) {
+  RayTally tally;
+  size_t kept = 0;
+  for (size_t i = 0; i < outcomes.size(); ++i) {
+    const RayOutcome& o = outcomes[i];
+    tally.count(o, iterative);
+    if (o.kind == RTCD_RAY_DROPPED) continue;
+    // Walks keep nearly every ray: no copy onto itself (a store the next
+    // load would wait for).
+    if (kept != i) outcomes[kept] = o;
+    ++kept;
+  }
+  outcomes.resize(kept);
+  return tally;
+}
 
 std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,
                                                         std::unique_ptr<RayExecutor> executor, const Config& config) {

@@ -5,6 +5,7 @@
 // its data lives (CPU threads now, devices later).
 #pragma once
 
+#include <array>
 #include <memory>
 #include <span>
 #include <string>
@@ -65,6 +66,25 @@ struct Transfers {
 // is the kernel's float distance; the host refines reported rays in double.
 using RayOutcome = rtcd_outcome;
 
+// A job's rays summed up: its records (contacts, predictive rays) and its
+// share of the step's statistics.
+struct RayTally {
+  size_t contacts = 0, predictive = 0;
+  size_t candidates = 0, rays_full = 0, rays_predictive = 0, rays_iterative = 0, walk_steps = 0;
+  size_t nearest_queries = 0, rays_retraced = 0, rays_watched = 0, fold_casts = 0;
+  std::array<size_t, RTCD_LINE_STATUS_COUNT> endings{};
+
+  void count(const RayOutcome& o, bool iterative);
+  RayTally& operator+=(const RayTally& other);
+};
+
+// Counts a job's outcomes, then removes those that neither report nor track
+// anything (RTCD_RAY_DROPPED), keeping the others in order. Executors call
+// it on each job's outcomes once they are final, on the thread that wrote
+// them, while they are still in its cache: most candidates of a full step
+// are dropped, and the host then reads only the rest.
+RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative);
+
 class RayExecutor {
  public:
   virtual ~RayExecutor() = default;
@@ -73,14 +93,16 @@ class RayExecutor {
   // Called before each step's batches: a residence is good for the step
   // after the one that wrote it.
   virtual void begin_step() {}
-  // outcomes[j] receives job j's candidates in order: every origin with a
-  // direction inside the overlap box (full jobs, by vertex), or every tracked
-  // ray whose origin is inside it (iterative jobs, in tracked order); a ray
-  // that reports nothing has kind RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when
-  // it stays tracked (its `triangle` is where the next walk starts). The caller sizes
-  // `outcomes` to at least jobs.size(); the executor only clears and fills.
+  // Job j's candidates, in order — every origin with a direction inside
+  // the overlap box (full jobs, by vertex), or every tracked ray whose
+  // origin is inside it (iterative jobs, in tracked order) — each traced or
+  // walked to one outcome; a ray that reports nothing has kind
+  // RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when it stays tracked (its
+  // `triangle` is where the next walk starts). tallies[j] and outcomes[j]
+  // receive what settle_outcomes makes of them. The caller sizes both to at
+  // least jobs.size(); the executor only clears and fills.
   virtual Transfers execute(std::span<const RayJob> jobs, const Config& config,
-                            std::span<std::vector<RayOutcome>> outcomes) = 0;
+                            std::span<std::vector<RayOutcome>> outcomes, std::span<RayTally> tallies) = 0;
 };
 
 std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,
