@@ -49,13 +49,17 @@ Pose pose_from(const std::vector<double>& v, const std::string& what) {
 
 }  // namespace
 
+void Knobs::apply(Config& c) const {
+  if (no_predictive) c.predictive = false;
+  if (no_verify_walks) c.verify_walks = false;
+  if (max_walk_steps) c.max_walk_steps = max_walk_steps;
+  if (displacement_threshold) c.displacement_threshold = displacement_threshold;
+  if (distance_extension) c.distance_extension = distance_extension;
+}
+
 Config Knobs::config() const {
   Config c;
-  c.predictive = !no_predictive;
-  c.verify_walks = !no_verify_walks;
-  c.max_walk_steps = max_walk_steps;
-  c.displacement_threshold = displacement_threshold;
-  c.distance_extension = distance_extension;
+  apply(c);
   return c;
 }
 

@@ -23,7 +23,8 @@ struct Knobs {
   std::optional<uint32_t> max_walk_steps;
   std::optional<double> displacement_threshold;
   std::optional<double> distance_extension;
-  Config config() const;  // the default Config with these knobs set
+  void apply(Config& config) const;  // sets what these knobs set, leaves the rest
+  Config config() const;             // the default Config with these knobs set
 };
 void add_knobs(CLI::App& command, Knobs& knobs);
 

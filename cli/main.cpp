@@ -9,6 +9,7 @@
 #include "bench.hpp"
 #include "check.hpp"
 #include "inputs.hpp"
+#include "replay.hpp"
 #include "report.hpp"
 #include "run.hpp"
 #include "validate.hpp"
@@ -163,6 +164,16 @@ int main(int argc, char** argv) {
   bench->add_option("--seeds", bo.seeds, "Seeds per interpenetration variant")->check(CLI::Range(1, 100));
   bench->add_flag("--no-plots", bench_no_plots, "Skip the PNG plots");
 
+  rtcd::cli::ReplayOptions ro;
+  auto* replay = app.add_subcommand(
+      "replay", "Replay a recording (from rtcd bench) through one narrow-phase configuration: time per stage and phase");
+  replay->add_option("RECORDING", ro.recording, "recording.rtcdrec")->required();
+  replay->add_option("--backend", ro.backend, "basic, embree, opencl[-basic][:...] or auto (default: embree)");
+  replay->add_option("--mode", ro.mode, "full, iterative or auto (default: auto)");
+  replay->add_option("--threads", ro.threads, "Worker threads (default: 1)")->check(CLI::Range(1, 4096));
+  replay->add_option("--judge-every", ro.judge_every, "Judge rays by the exact reference every k-th step (default: never)");
+  rtcd::cli::add_knobs(*replay, ro.knobs);
+
   try {
     app.parse(argc, argv);
     if (*backends) return run_backends(backends_json);
@@ -176,6 +187,7 @@ int main(int argc, char** argv) {
       return rtcd::cli::run_scene(r);
     }
     if (*check) return rtcd::cli::run_check(c);
+    if (*replay) return rtcd::cli::run_replay(ro);
     if (*validate) {
       if (sweep && v.sweep_csv.empty()) v.sweep_csv = "-";
       if (!sweep && !v.sweep_csv.empty()) throw rtcd::UsageError("--csv needs --sweep");

@@ -225,6 +225,19 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   ASSERT_EQ(replayed.code, 0) << replayed.out;
   EXPECT_TRUE(std::filesystem::exists(again + "/table_2_1.csv"));
 
+  // One configuration on the recording: every pair traced in full in full
+  // mode, the judged steps counted.
+  const std::string recording = out + "/recording.rtcdrec";
+  const Outcome full = run("replay " + recording + " --mode full --threads 2 --judge-every 10");
+  ASSERT_EQ(full.code, 0) << full.out;
+  const size_t all = full.out.find("| all | 60 |");
+  ASSERT_NE(all, std::string::npos) << full.out;
+  EXPECT_NE(full.out.find("| 100.0% |", all), std::string::npos) << full.out;
+  EXPECT_NE(full.out.find("| 6: ", all), std::string::npos) << full.out;
+  const Outcome automatic = run("replay " + recording + " --displacement-threshold 0.01");
+  ASSERT_EQ(automatic.code, 0) << automatic.out;
+  EXPECT_NE(automatic.out.find("mode auto, 1 thread;"), std::string::npos) << automatic.out;
+
   const std::string junk = write("junk.rtcdrec", "RTCDREC1 and then nothing sensible");
   for (const auto& [args, fragment] : std::vector<std::pair<std::string, std::string>>{
            {"bench no_such_scene", "no such scene file"},
@@ -232,7 +245,10 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
            {"bench avalanche --replay " + junk, "not both"},
            {"bench --replay " + junk, "junk.rtcdrec"},
            {"bench avalanche --seeds 0", "seeds"},
-           {"bench avalanche --steps 0", "steps"}}) {
+           {"bench avalanche --steps 0", "steps"},
+           {"replay " + junk, "junk.rtcdrec"},
+           {"replay " + out + "/recording.rtcdrec --mode sideways", "sideways"},
+           {"replay " + out + "/recording.rtcdrec --backend nosuch", "nosuch"}}) {
     const Outcome bad = run(args);
     EXPECT_EQ(bad.code, 2) << args << "\n" << bad.out;
     EXPECT_NE(bad.out.find(fragment), std::string::npos) << args << "\n" << bad.out;

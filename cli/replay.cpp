@@ -1,0 +1,100 @@
+// `rtcd replay`: a recording through one configuration, summed per phase.
+#include "replay.hpp"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "console.hpp"
+#include "rtcd/error.hpp"
+#include "rtcd/experiments/bench.hpp"
+#include "rtcd/experiments/replay.hpp"
+#include "rtcd/narrow_phase.hpp"
+
+namespace rtcd::cli {
+namespace {
+
+// One phase's steps summed.
+struct Sum {
+  uint64_t steps = 0, peak_step = 0;
+  double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
+  size_t pairs = 0, pairs_full = 0, rays = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+
+  void add(uint64_t step, const experiments::ReplayStep& s) {
+    ++steps;
+    detect += s.seconds;
+    prepare += s.seconds_prepare;
+    full += s.seconds_full;
+    walks += s.seconds_iterative;
+    gather += s.seconds_gather;
+    if (s.seconds > peak) {
+      peak = s.seconds;
+      peak_step = step;
+    }
+    pairs += s.pairs;
+    pairs_full += s.pairs_full;
+    rays += s.rays;
+    contacts += s.contacts;
+    judged += s.judged;
+    deep += s.deep;
+    missed += s.missed;
+    false_rays += s.false_rays;
+  }
+};
+
+void print_row(const std::string& name, const Sum& s) {
+  const double n = double(std::max<uint64_t>(s.steps, 1));
+  const auto ms = [&](double seconds) { return 1e3 * seconds / n; };
+  std::printf("| %s | %llu | %.3f | %.2f (%llu) | %.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.0f | %.0f | ", name.c_str(),
+              static_cast<unsigned long long>(s.steps), ms(s.detect), 1e3 * s.peak,
+              static_cast<unsigned long long>(s.peak_step), ms(s.prepare), ms(s.full), ms(s.walks), ms(s.gather),
+              double(s.pairs) / n, s.pairs ? 100.0 * double(s.pairs_full) / double(s.pairs) : 0.0, double(s.rays) / n,
+              double(s.contacts) / n);
+  if (s.judged == 0) {
+    std::printf("– |\n");
+  } else {
+    std::printf("%zu: %zu of %zu deep rays missed, %zu false |\n", s.judged, s.missed, s.deep, s.false_rays);
+  }
+}
+
+}  // namespace
+
+int run_replay(const ReplayOptions& o) {
+  const sim::Recording recording = sim::Recording::read(o.recording);
+  if (recording.steps().empty()) throw UsageError(o.recording + ": holds no steps");
+  experiments::ReplayConfig c;
+  c.label = o.backend + " " + o.mode;
+  c.backend = o.backend;
+  c.config = recording.scene().narrow;
+  c.config.mode = parse_mode(o.mode);
+  o.knobs.apply(c.config);
+  c.threads = o.threads;
+  experiments::ReplayOptions ro;
+  ro.judge_every = o.judge_every;
+  Progress bar(recording.steps().size(), "replay");
+  ro.progress = [&](uint64_t done, uint64_t) { bar.update(done); };
+  const experiments::ReplayRun run = experiments::replay(recording, {c}, ro).front();
+
+  const experiments::Phases phases = experiments::find_phases(recording.steps());
+  std::printf("%s: scene %s, %zu steps; %s, mode %s, %d thread%s; machine %s\n", o.recording.c_str(),
+              recording.scene().name.c_str(), recording.steps().size(), run.engine_name.c_str(), o.mode.c_str(),
+              o.threads, o.threads == 1 ? "" : "s", machine().c_str());
+  std::printf("Phases: %s\n\n", phases.rule().c_str());
+  std::printf(
+      "| phase | steps | detect (ms) | peak (ms, step) | prepare | full tracing | walks | gather | pairs | traced in "
+      "full | rays | contacts | judged steps |\n");
+  std::printf("| :-- | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | :-- |\n");
+  Sum all;
+  for (const char phase : {'-', 'A', 'B', 'C'}) {
+    Sum sum;
+    for (uint64_t k = 0; k < run.steps.size(); ++k)
+      if (phases.of(k) == phase) sum.add(k, run.steps[k]);
+    if (sum.steps == 0) continue;
+    print_row(phase == '-' ? "before A" : std::string(1, phase), sum);
+  }
+  for (uint64_t k = 0; k < run.steps.size(); ++k) all.add(k, run.steps[k]);
+  print_row("all", all);
+  std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats).\n");
+  return 0;
+}
+
+}  // namespace rtcd::cli
