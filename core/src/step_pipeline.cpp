@@ -443,24 +443,6 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
 
 }  // namespace
 
-void RayTally::count(const RayOutcome& o, bool iterative) {
-  ++candidates;
-  contacts += o.kind == RTCD_RAY_PENETRATING;
-  predictive += o.kind == RTCD_RAY_PREDICTIVE;
-  rays_watched += o.kind == RTCD_RAY_WATCHED;
-  rays_predictive += o.predictive_cast;
-  nearest_queries += o.nearest_query;
-  rays_retraced += o.retraced;
-  fold_casts += o.fold_cast;
-  if (iterative) {
-    ++rays_iterative;
-    walk_steps += o.walk_steps;
-    ++endings[o.status];
-  } else {
-    ++rays_full;
-  }
-}
-
 RayTally& RayTally::operator+=(const RayTally& o) {
   contacts += o.contacts;
   predictive += o.predictive;

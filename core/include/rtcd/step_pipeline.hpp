@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/kernel/classify.h"
 #include "rtcd/kernel/tracer.h"
 #include "rtcd/limits.hpp"
 #include "rtcd/narrow_phase.hpp"
@@ -74,7 +75,23 @@ struct RayTally {
   size_t nearest_queries = 0, rays_retraced = 0, rays_watched = 0, fold_casts = 0;
   std::array<size_t, RTCD_LINE_STATUS_COUNT> endings{};
 
-  void count(const RayOutcome& o, bool iterative);
+  void count(const RayOutcome& o, bool iterative) {
+    ++candidates;
+    contacts += o.kind == RTCD_RAY_PENETRATING;
+    predictive += o.kind == RTCD_RAY_PREDICTIVE;
+    rays_watched += o.kind == RTCD_RAY_WATCHED;
+    rays_predictive += o.predictive_cast;
+    nearest_queries += o.nearest_query;
+    rays_retraced += o.retraced;
+    fold_casts += o.fold_cast;
+    if (iterative) {
+      ++rays_iterative;
+      walk_steps += o.walk_steps;
+      ++endings[o.status];
+    } else {
+      ++rays_full;
+    }
+  }
   RayTally& operator+=(const RayTally& other);
 };
 
