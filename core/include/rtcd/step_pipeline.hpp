@@ -98,8 +98,9 @@ struct RayTally {
 // Counts a job's outcomes, then removes those that neither report nor track
 // anything (RTCD_RAY_DROPPED), keeping the others in order. Executors call
 // it on each job's outcomes once they are final, on the thread that wrote
-// them, while they are still in its cache: most candidates of a full step
-// are dropped, and the host then reads only the rest.
+// them: the counting then runs on every executor thread at once instead of
+// in a pass of the host's, and the host reads only the kept outcomes (most
+// candidates of a full step are dropped).
 RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative);
 
 class RayExecutor {
