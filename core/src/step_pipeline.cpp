@@ -152,7 +152,6 @@ class PipelineNarrowPhase final : public NarrowPhase {
     bool fresh;
     PairLimits limits;
     uint32_t list, first;
-    RayTally tally;
   };
 
   Body& body_at(BodyId id) {
@@ -283,7 +282,6 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     pr = PairResult{};
     pr.pair = p;
     pr.mode = iterative ? PairMode::iterative : PairMode::full;
-    w.tally = {};
     for (uint32_t k = 0; k < 2; ++k) {
       const BodyId source = k == 0 ? p.a : p.b, target = k == 0 ? p.b : p.a;
       RayJob& job = jobs_[w.list][w.first + k];
@@ -350,37 +348,34 @@ void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const
 // Ranges per pair in input order (a's rays, then b's), then every record
 // filled in parallel and the tracked rays mirrored from the kept outcomes.
 void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& out) {
-  size_t outcomes = 0;
+  size_t outcomes = 0, contacts = 0, predictive = 0;
+  RayTally step;
   for (size_t i = 0; i < pairs.size(); ++i) {
-    PairWork& w = work_[i];
-    w.tally = tallies_[w.list][w.first];
-    w.tally += tallies_[w.list][w.first + 1];
-    outcomes += outcomes_[w.list][w.first].size() + outcomes_[w.list][w.first + 1].size();
-  }
-
-  size_t contacts = 0, predictive = 0;
-  StepStats& s = out.stats;
-  for (size_t i = 0; i < pairs.size(); ++i) {
-    const RayTally& t = work_[i].tally;
+    const PairWork& w = work_[i];
+    RayTally pair = tallies_[w.list][w.first];
+    pair += tallies_[w.list][w.first + 1];
     PairResult& pr = out.pairs[i];
     pr.first_contact = contacts;
-    pr.contact_count = t.contacts;
+    pr.contact_count = pair.contacts;
     pr.first_predictive = predictive;
-    pr.predictive_count = t.predictive;
-    pr.colliding = t.contacts > 0;
-    contacts += t.contacts;
-    predictive += t.predictive;
-    s.candidates += t.candidates;
-    s.rays_full += t.rays_full;
-    s.rays_predictive += t.rays_predictive;
-    s.rays_iterative += t.rays_iterative;
-    s.walk_steps += t.walk_steps;
-    s.nearest_queries += t.nearest_queries;
-    s.rays_retraced += t.rays_retraced;
-    s.rays_watched += t.rays_watched;
-    s.fold_casts += t.fold_casts;
-    for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) s.walk_endings[e] += t.endings[e];
+    pr.predictive_count = pair.predictive;
+    pr.colliding = pair.contacts > 0;
+    contacts += pair.contacts;
+    predictive += pair.predictive;
+    outcomes += outcomes_[w.list][w.first].size() + outcomes_[w.list][w.first + 1].size();
+    step += pair;
   }
+  StepStats& s = out.stats;
+  s.candidates = step.candidates;
+  s.rays_full = step.rays_full;
+  s.rays_predictive = step.rays_predictive;
+  s.rays_iterative = step.rays_iterative;
+  s.walk_steps = step.walk_steps;
+  s.nearest_queries = step.nearest_queries;
+  s.rays_retraced = step.rays_retraced;
+  s.rays_watched = step.rays_watched;
+  s.fold_casts = step.fold_casts;
+  s.walk_endings = step.endings;
   out.contacts.resize(contacts);
   out.predictive.resize(predictive);
 

@@ -382,6 +382,53 @@ TEST_P(Conformance, SameContactsInABatchAsAlone) {
   EXPECT_GT(contacts, 500u) << "too few contacts: the comparison would be vacuous";
 }
 
+// The step's statistics agree with one another and with its records, in
+// full and in iterative steps: every candidate is one inward ray or one
+// walk, every walk ends one way, and rays that report and track nothing
+// count all the same.
+TEST_P(Conformance, StatisticsAddUp) {
+  auto blob_a = shape(gen::concave_blob(902, 1));
+  auto blob_b = shape(gen::concave_blob(902, 2));
+  for (const Mode mode : {Mode::full, Mode::iterative}) {
+    Config config;
+    config.mode = mode;
+    auto narrow = make_narrow_phase(GetParam(), config);
+    const ShapeId sa = narrow->add_shape(blob_a), sb = narrow->add_shape(blob_b);
+    std::vector<BodyPair> pairs;
+    for (int i = 0; i < 8; ++i)
+      pairs.push_back({narrow->add_body(sa, at(10.0 * i, 0, 0)), narrow->add_body(sb, at(10.0 * i + 1.2, 0.1, 0.05))});
+    for (int step = 0; step < 3; ++step) {
+      SCOPED_TRACE(std::string(to_string(mode)) + ", step " + std::to_string(step));
+      const StepResult r = narrow->detect(pairs);
+      const StepStats& s = r.stats;
+      size_t contacts = 0, predictive = 0;
+      for (const PairResult& p : r.pairs) {
+        contacts += p.contact_count;
+        predictive += p.predictive_count;
+      }
+      EXPECT_GT(r.contacts.size(), 0u);
+      EXPECT_EQ(contacts, r.contacts.size());
+      EXPECT_EQ(predictive, r.predictive.size());
+      EXPECT_EQ(s.candidates, s.rays_full + s.rays_iterative);
+      size_t endings = 0;
+      for (size_t e : s.walk_endings) endings += e;
+      EXPECT_EQ(endings, s.rays_iterative);
+      if (mode == Mode::full) {
+        // Nothing is watched in full mode, and most candidates report nothing.
+        EXPECT_EQ(s.rays_watched, 0u);
+        EXPECT_GT(s.rays_full, 2 * (r.contacts.size() + r.predictive.size()));
+      } else if (step == 0) {
+        EXPECT_EQ(s.rays_iterative, 0u);
+        EXPECT_GE(s.rays_full, r.contacts.size() + r.predictive.size() + s.rays_watched);
+      } else {
+        EXPECT_EQ(s.rays_full, 0u);
+        EXPECT_GT(s.rays_iterative, 0u);
+        EXPECT_GE(s.walk_steps, s.rays_iterative);
+      }
+    }
+  }
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(usable_backends()),
                          [](const auto& info) { return test_name(info.param); });
 
