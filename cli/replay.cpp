@@ -17,7 +17,7 @@ namespace {
 struct Sum {
   uint64_t steps = 0, peak_step = 0;
   double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
-  size_t pairs = 0, pairs_full = 0, rays = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+  size_t pairs = 0, pairs_full = 0, fallbacks = 0, rays = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
 
   void add(uint64_t step, const experiments::ReplayStep& s) {
     ++steps;
@@ -32,6 +32,7 @@ struct Sum {
     }
     pairs += s.pairs;
     pairs_full += s.pairs_full;
+    fallbacks += s.fallbacks;
     rays += s.rays;
     contacts += s.contacts;
     judged += s.judged;
@@ -44,10 +45,11 @@ struct Sum {
 void print_row(const std::string& name, const Sum& s) {
   const double n = double(std::max<uint64_t>(s.steps, 1));
   const auto ms = [&](double seconds) { return 1e3 * seconds / n; };
-  std::printf("| %s | %llu | %.3f | %.2f (%llu) | %.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.0f | %.0f | ", name.c_str(),
+  const auto percent = [&](size_t count) { return s.pairs ? 100.0 * double(count) / double(s.pairs) : 0.0; };
+  std::printf("| %s | %llu | %.3f | %.2f (%llu) | %.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.1f%% | %.0f | %.0f | ", name.c_str(),
               static_cast<unsigned long long>(s.steps), ms(s.detect), 1e3 * s.peak,
               static_cast<unsigned long long>(s.peak_step), ms(s.prepare), ms(s.full), ms(s.walks), ms(s.gather),
-              double(s.pairs) / n, s.pairs ? 100.0 * double(s.pairs_full) / double(s.pairs) : 0.0, double(s.rays) / n,
+              double(s.pairs) / n, percent(s.pairs_full), percent(s.fallbacks), double(s.rays) / n,
               double(s.contacts) / n);
   if (s.judged == 0) {
     std::printf("– |\n");
@@ -81,8 +83,8 @@ int run_replay(const ReplayOptions& o) {
   std::printf("Phases: %s\n\n", phases.rule().c_str());
   std::printf(
       "| phase | steps | detect (ms) | peak (ms, step) | prepare | full tracing | walks | gather | pairs | traced in "
-      "full | rays | contacts | judged steps |\n");
-  std::printf("| :-- | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | :-- |\n");
+      "full | sent back | rays | contacts | judged steps |\n");
+  std::printf("| :-- | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | :-- |\n");
   Sum all;
   for (const char phase : {'-', 'A', 'B', 'C'}) {
     Sum sum;
@@ -93,7 +95,7 @@ int run_replay(const ReplayOptions& o) {
   }
   for (uint64_t k = 0; k < run.steps.size(); ++k) all.add(k, run.steps[k]);
   print_row("all", all);
-  std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats).\n");
+  std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats); sent back: pairs traced in full because equation 2.1 ended their walks (the others traced in full are new).\n");
   return 0;
 }
 

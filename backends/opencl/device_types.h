@@ -32,7 +32,13 @@ typedef struct {
   rtcd_uint first_item;
   rtcd_uint item_count;
   rtcd_uint first_tracked; /* iterative jobs: the job's tracked rays */
+  rtcd_uint first_near;    /* full jobs: the job's words of near-leaf bits */
 } rtcd_device_job;
+
+/* Whether a full job's near-leaf bits hold source-tree node `leaf`. */
+RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* bits, rtcd_uint leaf) {
+  return (int)((bits[leaf / 32] >> (leaf % 32)) & 1u);
+}
 
 /* rtcd::TrackedRay. */
 typedef struct {

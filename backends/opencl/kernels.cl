@@ -72,14 +72,34 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
   return lo;
 }
 
+/* One full job: the origins of its near leaves, in vertex order, listed as
+ * its items (the host counted them). */
+__kernel void rtcd_list(__global const rtcd_device_job* jobs, rtcd_uint job_count,
+                        __global const rtcd_device_shape* shapes, __global const rtcd_uint* source_leaves,
+                        __global const rtcd_uint* near_bits, __global rtcd_uint* vertices) {
+  rtcd_uint j = get_global_id(0);
+  rtcd_uint v, n, count;
+  rtcd_device_job job;
+  __global const rtcd_uint* leaves;
+  if (j >= job_count) return;
+  job = jobs[j];
+  if (job.params.iterative || job.item_count == 0) return;
+  leaves = source_leaves + shapes[job.source].first_source;
+  count = shapes[job.source].source_count;
+  n = job.first_item;
+  for (v = 0; v < count; ++v)
+    if (rtcd_near_leaf(near_bits + job.first_near, leaves[v])) vertices[n++] = v;
+}
+
 #ifdef RTCD_HAS_DOUBLE
 /* One item: the possible ray placed in the target's frame (rtcd_place_ray,
  * in double) and flagged when it is a candidate. */
 __kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const rtcd_uint* first_items,
                           __global const rtcd_frame* frames, rtcd_uint job_count, rtcd_uint item_count,
                           __global const rtcd_device_shape* shapes, __global const rtcd_vec3* origins,
-                          __global const rtcd_vec3* directions, __global const rtcd_tracked* tracked,
-                          __global rtcd_uchar* flags, __global rtcd_candidate* staging) {
+                          __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
+                          __global const rtcd_tracked* tracked, __global rtcd_uchar* flags,
+                          __global rtcd_candidate* staging) {
   rtcd_uint i = get_global_id(0);
   rtcd_uint j, k, s;
   rtcd_device_job job;
@@ -96,7 +116,7 @@ __kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const r
     c.start = r.triangle;
     c.entry = r.entry;
   } else {
-    c.vertex = k;
+    c.vertex = vertices[i];
     c.start = -1;
     c.entry = -1;
   }

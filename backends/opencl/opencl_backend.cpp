@@ -5,7 +5,10 @@
 // with its own queue, and all devices run at once:
 //   1. rtcd_select: every possible ray (source vertex, or tracked ray) placed
 //      in the target's frame in double and flagged when it is a candidate
-//      (the host places them when a device lacks fp64);
+//      (the host places them when a device lacks fp64); a full job's
+//      possible rays are the origins of the source-tree leaves near its
+//      overlap box, which the host finds and sends as one bit per node, and
+//      rtcd_list lists in vertex order;
 //   2. rtcd_count: per job, a prefix sum over the flags, so the candidates
 //      form a compacted list in the CPU's order; the counts come back;
 //   3. rtcd_scatter and rtcd_trace: candidates to their places, then one
@@ -46,7 +49,7 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // The kernels read the buffers with OpenCL C's layout of the same structs:
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
 static_assert(sizeof(rtcd_outcome) == 28 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 52);
-static_assert(sizeof(rtcd_device_job) == 72 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_device_job) == 76 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8);
 
 constexpr size_t kGroupSize = 64;
@@ -264,6 +267,7 @@ std::shared_ptr<const Runtime> acquire_runtime(const Selection& s, OpenClFault f
 struct ShapeData {
   std::vector<rtcd_device_shape> table;
   std::vector<rtcd_vec3> positions, normals, origins, directions;
+  std::vector<rtcd_uint> source_leaves;  // per origin: its leaf's node in the shape's source tree
   // Fold guards: ring_first rebased into the one ring list, with a
   // closing entry after the last mesh's triangles.
   std::vector<rtcd_fold_face> fold_faces;
@@ -288,8 +292,13 @@ struct ShapeData {
     d.first_primitive = rtcd_uint(primitives.size());
     d.first_source = rtcd_uint(origins.size());
     d.source_count = rtcd_uint(shape.sources().origins.size());
-    append(origins, shape.sources().origins);
-    append(directions, shape.sources().directions);
+    const RaySources& rs = shape.sources();
+    append(origins, rs.origins);
+    append(directions, rs.directions);
+    source_leaves.resize(origins.size(), 0);
+    for (uint32_t n = 0; n < rs.nodes.size(); ++n)
+      if (rs.nodes[n].child == 0)
+        for (uint32_t k = rs.nodes[n].begin; k < rs.nodes[n].end; ++k) source_leaves[d.first_source + rs.order[k]] = n;
     if (const Mesh* mesh = shape.mesh()) {
       d.kind = RTCD_TARGET_MESH;
       d.triangle_count = rtcd_uint(mesh->triangle_count());
@@ -334,17 +343,17 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kPrimitives,
-  kOrigins, kDirections
+  kOrigins, kDirections, kSourceLeaves
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel select, count, scatter, trace, trace_items, keep;
+  cl::Kernel list, select, count, scatter, trace, trace_items, keep;
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
-  GrowingBuffer jobs, first_items, frames, flags, staging, slots, counts, first_rays, rays, outcomes;
+  GrowingBuffer jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
   // Tracked rays that stay on the device, by step parity: the step's
   // batches append what they keep to one (rtcd_keep) while its walks read
   // the other, written the step before, with the rays that came from
@@ -360,6 +369,7 @@ struct Device {
   std::vector<rtcd_device_job> host_jobs;
   std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
   std::vector<rtcd_frame> host_frames;
+  std::vector<rtcd_uint> host_near;  // full jobs' near-leaf bits, by source-tree node
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
   std::vector<rtcd_outcome> host_outcomes;
@@ -388,7 +398,10 @@ class OpenClExecutor final : public RayExecutor {
       for (const cl::Device& d : runtime_->devices) {
         Device device;
         device.queue = cl::CommandQueue(runtime_->context, d);
-        if (runtime_->place_on_device) device.select = cl::Kernel(runtime_->program, "rtcd_select");
+        if (runtime_->place_on_device) {
+          device.list = cl::Kernel(runtime_->program, "rtcd_list");
+          device.select = cl::Kernel(runtime_->program, "rtcd_select");
+        }
         device.count = cl::Kernel(runtime_->program, "rtcd_count");
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
@@ -396,7 +409,7 @@ class OpenClExecutor final : public RayExecutor {
         device.keep = cl::Kernel(runtime_->program, "rtcd_keep");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
-             {&device.select, &device.count, &device.scatter, &device.trace, &device.trace_items, &device.keep})
+             {&device.list, &device.select, &device.count, &device.scatter, &device.trace, &device.trace_items, &device.keep})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
@@ -478,7 +491,7 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.neighbors), upload_once(data_.zero_area), upload_once(data_.normals),
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),     upload_once(data_.primitives), upload_once(data_.origins),
-                upload_once(data_.directions)};
+                upload_once(data_.directions), upload_once(data_.source_leaves)};
     d.shapes_uploaded = data_.table.size();
   }
 
@@ -526,22 +539,6 @@ class OpenClExecutor final : public RayExecutor {
            job.residence->step + 1 == step_ && job.residence->place < devices_.size();
   }
 
-  static size_t items_of(const RayJob& job, const Shape& source) {
-    if (job.overlap.empty()) return 0;
-    return job.iterative ? job.tracked.size() : source.sources().origins.size();
-  }
-
-  // The rays a job is expected to cast, by which jobs are spread over the
-  // devices: its tracked rays, or the origins near its overlap box (a full
-  // job's device still selects from all its items).
-  static size_t expected_rays(const RayJob& job, const Shape& source) {
-    if (job.overlap.empty()) return 0;
-    if (job.iterative) return job.tracked.size();
-    size_t n = 0;
-    visit_near_origins(job, source.sources(), [&](uint32_t) { ++n; });
-    return n;
-  }
-
   // A job whose tracked rays are on a device walks there; every other job
   // goes to the device with the fewest expected rays so far. So a pair
   // stays where it is from one full step to the next, and may move to
@@ -552,6 +549,7 @@ class OpenClExecutor final : public RayExecutor {
       d.host_jobs.clear();
       d.host_first_items.clear();
       d.host_frames.clear();
+      d.host_near.clear();
       d.host_tracked.clear();
       d.items = 0;
       d.ray_count = 0;
@@ -570,9 +568,12 @@ class OpenClExecutor final : public RayExecutor {
     }
   }
 
+  // A job's items: its tracked rays, or the origins of its near leaves.
+  // Their count is also the rays it is expected to cast, by which jobs are
+  // spread over the devices.
   void add(Device& d, uint32_t j, const RayJob& job, const Config& config) {
-    const size_t items = items_of(job, *shapes_[job.source]);
     rtcd_device_job dj{};
+    const size_t items = job.overlap.empty() ? 0 : job.iterative ? job.tracked.size() : mark_near_leaves(d, job, dj);
     dj.params = make_trace_params(job, *shapes_[job.target], config);
     dj.source = job.source;
     dj.target = job.target;
@@ -592,8 +593,23 @@ class OpenClExecutor final : public RayExecutor {
     d.host_first_items.push_back(d.items);
     d.host_frames.push_back(make_frame(job));
     d.items += rtcd_uint(items);
-    d.load += expected_rays(job, *shapes_[job.source]);
+    d.load += items;
     d.keeps = d.keeps || job.residence;
+  }
+
+  // A full job's leaves near its overlap box (visit_near_leaves), as bits
+  // by node appended to the batch's; returns how many origins they hold.
+  size_t mark_near_leaves(Device& d, const RayJob& job, rtcd_device_job& dj) const {
+    const RaySources& rs = shapes_[job.source]->sources();
+    dj.first_near = rtcd_uint(d.host_near.size());
+    d.host_near.resize(d.host_near.size() + (rs.nodes.size() + 31) / 32, 0);
+    rtcd_uint* bits = d.host_near.data() + dj.first_near;
+    size_t origins = 0;
+    visit_near_leaves(job, rs, [&](uint32_t n) {
+      bits[n / 32] |= rtcd_uint(1) << (n % 32);
+      origins += rs.nodes[n].end - rs.nodes[n].begin;
+    });
+    return origins;
   }
 
   // The host's placement, for devices without fp64: the same rtcd_place_ray.
@@ -602,8 +618,12 @@ class OpenClExecutor final : public RayExecutor {
     for (uint32_t l = 0; l < d.host_jobs.size(); ++l) {
       const rtcd_device_job& job = d.host_jobs[l];
       const RaySources& rs = shapes_[job.source]->sources();
-      for (uint32_t k = 0; k < job.item_count; ++k) {
+      const rtcd_uint* leaves = data_.source_leaves.data() + data_.table[job.source].first_source;
+      // Tracked rays, or every origin of the near leaves (rtcd_list).
+      const uint32_t count = job.params.iterative || job.item_count == 0 ? job.item_count : uint32_t(rs.origins.size());
+      for (uint32_t k = 0; k < count; ++k) {
         rtcd_candidate c{k, -1, -1, l, {}, {}};
+        if (!job.params.iterative && !rtcd_near_leaf(d.host_near.data() + job.first_near, leaves[k])) continue;
         if (job.params.iterative) {
           const rtcd_tracked& r = d.host_tracked[job.first_tracked + k];
           c.vertex = r.vertex;
@@ -735,6 +755,18 @@ class OpenClExecutor final : public RayExecutor {
     d.kept_used[(step_ + 1) % 2] = d.upload_base + rtcd_uint(d.host_tracked.size());
     reserve(d.flags, d.items);
     reserve(d.staging, d.items * sizeof(rtcd_candidate));
+    reserve(d.vertices, d.items * sizeof(rtcd_uint));
+    if (!d.host_jobs.front().params.iterative) {
+      write(d, d.near, d.host_near);
+      cl::Kernel& l = d.list;
+      l.setArg(0, d.jobs.buffer);
+      l.setArg(1, jobs_count);
+      l.setArg(2, d.shapes[kTable]);
+      l.setArg(3, d.shapes[kSourceLeaves]);
+      l.setArg(4, d.near.buffer);
+      l.setArg(5, d.vertices.buffer);
+      launch(d, l, jobs_count);
+    }
     cl::Kernel& s = d.select;
     s.setArg(0, d.jobs.buffer);
     s.setArg(1, d.first_items.buffer);
@@ -744,9 +776,10 @@ class OpenClExecutor final : public RayExecutor {
     s.setArg(5, d.shapes[kTable]);
     s.setArg(6, d.shapes[kOrigins]);
     s.setArg(7, d.shapes[kDirections]);
-    s.setArg(8, tracked.buffer);
-    s.setArg(9, d.flags.buffer);
-    s.setArg(10, d.staging.buffer);
+    s.setArg(8, d.vertices.buffer);
+    s.setArg(9, tracked.buffer);
+    s.setArg(10, d.flags.buffer);
+    s.setArg(11, d.staging.buffer);
     launch(d, s, d.items);
     if (grid(d)) return;  // every item is traced in place: nothing to count
     reserve(d.slots, d.items * sizeof(rtcd_uint));

@@ -44,15 +44,14 @@ std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory
 rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, const Config& config);
 rtcd_frame make_frame(const RayJob& job);
 
-// Calls visit(v) for each origin of the job's source that may lie in the
-// job's overlap box: every origin of a leaf of the source's tree whose box,
-// placed in the target's frame as the box around it (in double, grown well
-// past rounding), meets the overlap box. So a superset of the candidates
-// rtcd_place_ray takes, found by whole boxes: most of a body's origins lie
-// far from the overlap and are turned away without being placed. Each
-// origin at most once, in no particular order.
-template <class Visit>
-void visit_near_origins(const RayJob& job, const RaySources& sources, const Visit& visit) {
+// Calls visit_node(n) for each leaf sources.nodes[n] of the source's tree
+// whose box, placed in the target's frame as the box around it (in double,
+// grown well past rounding), meets the job's overlap box. Its origins are a
+// superset of the candidates rtcd_place_ray takes, found by whole boxes:
+// most of a body's origins lie far from the overlap and are turned away
+// without being placed. Each leaf at most once, in no particular order.
+template <class VisitNode>
+void visit_near_leaves(const RayJob& job, const RaySources& sources, const VisitNode& visit_node) {
   if (job.overlap.empty()) return;
   const Eigen::Matrix3d& rotation = job.rotation;
   const Eigen::Matrix3d spread = rotation.cwiseAbs();
@@ -64,7 +63,16 @@ void visit_near_origins(const RayJob& job, const RaySources& sources, const Visi
     const Eigen::Vector3d half = spread * (0.5 * (hi.cast<double>() - lo.cast<double>()));
     return ((centre + half).array() >= box.min.array()).all() && ((centre - half).array() <= box.max.array()).all();
   };
-  sources.visit_leaves(may_hold, visit);
+  sources.visit_leaf_nodes(may_hold, visit_node);
+}
+
+// Calls visit(v) for each origin of the leaves visit_near_leaves reaches:
+// each at most once, in no particular order.
+template <class Visit>
+void visit_near_origins(const RayJob& job, const RaySources& sources, const Visit& visit) {
+  visit_near_leaves(job, sources, [&](uint32_t n) {
+    for (uint32_t k = sources.nodes[n].begin; k < sources.nodes[n].end; ++k) visit(sources.order[k]);
+  });
 }
 
 }  // namespace rtcd

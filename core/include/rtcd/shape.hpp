@@ -56,23 +56,34 @@ struct RaySources {
   // once, in no particular order.
   template <class MayHold, class Visit>
   void visit_leaves(const MayHold& may_hold, const Visit& visit) const;
+  // The same walk, calling visit_node(n) once per leaf nodes[n] reached.
+  template <class MayHold, class VisitNode>
+  void visit_leaf_nodes(const MayHold& may_hold, const VisitNode& visit_node) const;
 };
 
 template <class MayHold, class Visit>
 void RaySources::visit_leaves(const MayHold& may_hold, const Visit& visit) const {
+  visit_leaf_nodes(may_hold, [&](uint32_t n) {
+    for (uint32_t k = nodes[n].begin; k < nodes[n].end; ++k) visit(order[k]);
+  });
+}
+
+template <class MayHold, class VisitNode>
+void RaySources::visit_leaf_nodes(const MayHold& may_hold, const VisitNode& visit_node) const {
   if (nodes.empty()) return;
   uint32_t stack[64];  // depth <= log2(origins) + 1 for median splits
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
-    const Node& n = nodes[stack[--top]];
+    const uint32_t index = stack[--top];
+    const Node& n = nodes[index];
     if (!may_hold(n.lo, n.hi)) continue;
     if (n.child != 0) {
       stack[top++] = n.child;
       stack[top++] = n.child + 1;
       continue;
     }
-    for (uint32_t k = n.begin; k < n.end; ++k) visit(order[k]);
+    visit_node(index);
   }
 }
 

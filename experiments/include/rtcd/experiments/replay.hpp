@@ -47,6 +47,7 @@ struct ReplayStep {
   double seconds_rays() const { return seconds_full + seconds_iterative; }
   size_t pairs = 0, colliding = 0, contacts = 0;
   size_t pairs_full = 0, pairs_iterative = 0, rays = 0;
+  size_t fallbacks = 0;  // of pairs_full, those equation 2.1 sent back (the rest are new)
   double depth_sum = 0;  // summed depth of every contact as the engine reports it
   size_t bytes_to_device = 0, bytes_from_device = 0;  // ours on OpenCL: the step's host <-> device traffic
   // Judged steps (ours): ray origins the exact reference puts deeper than
