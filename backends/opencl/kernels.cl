@@ -92,8 +92,38 @@ __kernel void rtcd_list(__global const rtcd_device_job* jobs, rtcd_uint job_coun
 }
 
 #ifdef RTCD_HAS_DOUBLE
-/* One item: the possible ray placed in the target's frame (rtcd_place_ray,
- * in double) and flagged when it is a candidate. */
+/* Item i: the possible ray placed in the target's frame (rtcd_place_ray, in
+ * double) as candidate c; 1 when it is a candidate. */
+RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jobs,
+                                 __global const rtcd_uint* first_items, __global const rtcd_frame* frames,
+                                 rtcd_uint job_count, __global const rtcd_device_shape* shapes,
+                                 __global const rtcd_vec3* origins, __global const rtcd_vec3* directions,
+                                 __global const rtcd_uint* vertices, __global const rtcd_tracked* tracked,
+                                 rtcd_candidate* c) {
+  rtcd_uint j = rtcd_job_of(first_items, job_count, i);
+  rtcd_device_job job = jobs[j];
+  rtcd_frame frame;
+  rtcd_uint s;
+  c->job = j;
+  if (job.params.iterative) {
+    rtcd_tracked r = tracked[job.first_tracked + (i - job.first_item)];
+    c->vertex = r.vertex;
+    c->start = r.triangle;
+    c->entry = r.entry;
+  } else {
+    c->vertex = vertices[i];
+    c->start = -1;
+    c->entry = -1;
+  }
+  s = shapes[job.source].first_source + c->vertex;
+  frame = frames[j];
+  c->origin = rtcd_v3(0.0f, 0.0f, 0.0f);
+  c->direction = c->origin;
+  return rtcd_place_ray(&frame, origins[s], directions[s], &c->origin, &c->direction);
+}
+
+/* Compacted layout, one item: placed and flagged, for rtcd_count and
+ * rtcd_scatter. */
 __kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const rtcd_uint* first_items,
                           __global const rtcd_frame* frames, rtcd_uint job_count, rtcd_uint item_count,
                           __global const rtcd_device_shape* shapes, __global const rtcd_vec3* origins,
@@ -101,30 +131,10 @@ __kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const r
                           __global const rtcd_tracked* tracked, __global rtcd_uchar* flags,
                           __global rtcd_candidate* staging) {
   rtcd_uint i = get_global_id(0);
-  rtcd_uint j, k, s;
-  rtcd_device_job job;
-  rtcd_frame frame;
   rtcd_candidate c;
   if (i >= item_count) return;
-  j = rtcd_job_of(first_items, job_count, i);
-  job = jobs[j];
-  k = i - job.first_item;
-  c.job = j;
-  if (job.params.iterative) {
-    rtcd_tracked r = tracked[job.first_tracked + k];
-    c.vertex = r.vertex;
-    c.start = r.triangle;
-    c.entry = r.entry;
-  } else {
-    c.vertex = vertices[i];
-    c.start = -1;
-    c.entry = -1;
-  }
-  s = shapes[job.source].first_source + c.vertex;
-  frame = frames[j];
-  c.origin = rtcd_v3(0.0f, 0.0f, 0.0f);
-  c.direction = c.origin;
-  flags[i] = (rtcd_uchar)rtcd_place_ray(&frame, origins[s], directions[s], &c.origin, &c.direction);
+  flags[i] = (rtcd_uchar)rtcd_select_item(i, jobs, first_items, frames, job_count, shapes, origins, directions,
+                                          vertices, tracked, &c);
   staging[i] = c;
 }
 #endif
@@ -207,24 +217,32 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
                                      primitives);
 }
 
-/* Grid layout (Figure 2.6): one work-item per item, a candidate or not, in
- * place; the host keeps the flagged ones. */
+#ifdef RTCD_HAS_DOUBLE
+/* Grid layout (Figure 2.6): one work-item per item, a candidate or not,
+ * placed and traced in place; the host keeps the flagged ones. */
 __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                                __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                                __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
                                __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
-                              __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
-                              __global const rtcd_bvh_node* nodes,
-                               __global const rtcd_uint* primitives, __global const rtcd_candidate* staging,
-                               rtcd_uint item_count, __global const rtcd_uchar* flags,
+                               __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
+                               __global const rtcd_bvh_node* nodes, __global const rtcd_uint* primitives,
+                               __global const rtcd_uint* first_items, __global const rtcd_frame* frames,
+                               rtcd_uint job_count, rtcd_uint item_count, __global const rtcd_vec3* origins,
+                               __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
+                               __global const rtcd_tracked* tracked, __global rtcd_uchar* flags,
                                __global rtcd_outcome* outcomes) {
   rtcd_uint i = get_global_id(0);
   rtcd_candidate c;
-  if (i >= item_count || !flags[i]) return;
-  c = staging[i];
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces, ring_first, ring, nodes,
-                                     primitives);
+  int flag;
+  if (i >= item_count) return;
+  flag = rtcd_select_item(i, jobs, first_items, frames, job_count, shapes, origins, directions, vertices, tracked,
+                          &c);
+  flags[i] = (rtcd_uchar)flag;
+  if (!flag) return;
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces,
+                                     ring_first, ring, nodes, primitives);
 }
+#endif
 
 /* One job: the rays it goes on tracking (every outcome but the dropped
  * ones, in order) written where the next step's rtcd_select reads them, so

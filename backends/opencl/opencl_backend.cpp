@@ -16,6 +16,8 @@
 //      are written into each job's slot, so the step is in job order;
 //   4. rtcd_keep: the rays each job goes on tracking stay on the device for
 //      the next step's walks (jobs and frames go up, outcomes come down).
+// The grid layout (iterative batches) does 1 and 3 in one kernel,
+// rtcd_trace_items: each item placed and, if a candidate, traced in place.
 // Any fault (no platform, a failed build, out of memory, a device error)
 // is reported once and the step, and every later one, runs on the CPU
 // executor from the same jobs, so the result does not change.
@@ -401,11 +403,11 @@ class OpenClExecutor final : public RayExecutor {
         if (runtime_->place_on_device) {
           device.list = cl::Kernel(runtime_->program, "rtcd_list");
           device.select = cl::Kernel(runtime_->program, "rtcd_select");
+          device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
         }
         device.count = cl::Kernel(runtime_->program, "rtcd_count");
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
-        device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
         device.keep = cl::Kernel(runtime_->program, "rtcd_keep");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
@@ -710,19 +712,25 @@ class OpenClExecutor final : public RayExecutor {
     return layout_ == Layout::grid || (layout_ == Layout::by_mode && d.host_jobs.front().params.iterative);
   }
 
-  // The grid layout, after rtcd_select: every item traced in place (the
-  // non-candidates return at once), flags and outcomes back in one read,
-  // the candidates' outcomes kept in item order, which is ray order.
+  // The grid layout: every item placed and traced in place by one kernel
+  // (the non-candidates return at once), flags and outcomes back in one
+  // read, the candidates' outcomes kept in item order, which is ray order.
   void trace_in_place(Device& d) {
     reserve(d.outcomes, d.items * sizeof(rtcd_outcome));
     d.host_outcomes.resize(d.items);
     d.host_flags.resize(d.items);
     cl::Kernel& k = d.trace_items;
     const cl_uint next = bind_jobs_and_shapes(d, k);
-    k.setArg(next, d.staging.buffer);
-    k.setArg(next + 1, rtcd_uint(d.items));
-    k.setArg(next + 2, d.flags.buffer);
-    k.setArg(next + 3, d.outcomes.buffer);
+    k.setArg(next, d.first_items.buffer);
+    k.setArg(next + 1, d.frames.buffer);
+    k.setArg(next + 2, rtcd_uint(d.host_jobs.size()));
+    k.setArg(next + 3, rtcd_uint(d.items));
+    k.setArg(next + 4, d.shapes[kOrigins]);
+    k.setArg(next + 5, d.shapes[kDirections]);
+    k.setArg(next + 6, d.vertices.buffer);
+    k.setArg(next + 7, d.kept[(step_ + 1) % 2].buffer);
+    k.setArg(next + 8, d.flags.buffer);
+    k.setArg(next + 9, d.outcomes.buffer);
     launch(d, k, d.items);
     read(d, d.flags, d.host_flags);
     read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
@@ -740,8 +748,9 @@ class OpenClExecutor final : public RayExecutor {
     first_rays(d);
   }
 
-  // Phase 1, on the device: candidates placed and flagged; for the compacted
-  // layout also counted per job, and the counts come back.
+  // Phase 1, on the device: a full batch's items listed; for the compacted
+  // layout, candidates placed, flagged and counted per job, and the counts
+  // come back (the grid layout places them as it traces them).
   void place_on_device(Device& d) {
     const auto jobs_count = rtcd_uint(d.host_jobs.size());
     write(d, d.jobs, d.host_jobs);
@@ -754,7 +763,6 @@ class OpenClExecutor final : public RayExecutor {
     write_at(d, tracked, d.host_tracked, d.upload_base);
     d.kept_used[(step_ + 1) % 2] = d.upload_base + rtcd_uint(d.host_tracked.size());
     reserve(d.flags, d.items);
-    reserve(d.staging, d.items * sizeof(rtcd_candidate));
     reserve(d.vertices, d.items * sizeof(rtcd_uint));
     if (!d.host_jobs.front().params.iterative) {
       write(d, d.near, d.host_near);
@@ -767,6 +775,8 @@ class OpenClExecutor final : public RayExecutor {
       l.setArg(5, d.vertices.buffer);
       launch(d, l, jobs_count);
     }
+    if (grid(d)) return;
+    reserve(d.staging, d.items * sizeof(rtcd_candidate));
     cl::Kernel& s = d.select;
     s.setArg(0, d.jobs.buffer);
     s.setArg(1, d.first_items.buffer);
@@ -781,7 +791,6 @@ class OpenClExecutor final : public RayExecutor {
     s.setArg(10, d.flags.buffer);
     s.setArg(11, d.staging.buffer);
     launch(d, s, d.items);
-    if (grid(d)) return;  // every item is traced in place: nothing to count
     reserve(d.slots, d.items * sizeof(rtcd_uint));
     reserve(d.counts, jobs_count * sizeof(rtcd_uint));
     cl::Kernel& c = d.count;
