@@ -12,10 +12,11 @@ rtcd=./build/release/bin/rtcd
 mkdir -p "$out"
 
 # The phase C row of a replay's table, cells trimmed, '|' between them.
-phase_c() { "$rtcd" replay "$recording" --threads 1 "$@" 2>/dev/null | awk -F'|' '$2 ~ /^ C $/ {
+phase_c() { "$rtcd" replay "$recording" --threads 1 "$@" | awk -F'|' '$2 ~ /^ C $/ {
   for (i = 2; i < NF; ++i) { gsub(/^ +| +$/, "", $i); printf "%s%s", $i, (i < NF - 1 ? "|" : "\n") } }'; }
 
 full=$(phase_c --mode full)
+[ -n "$full" ] || { echo "threshold_sweep: $recording has no phase C (a scene that never settles)" >&2; exit 2; }
 full_rays=$(echo "$full" | awk -F'|' '{ printf "%.3f", $6 + $7 }')
 csv="$out/threshold_sweep.csv"
 echo "threshold,detect_ms,full_tracing_ms,walks_ms,ray_ms,full_mode_ray_ms,traced_in_full_pct,judged_steps,deep,missed,false_rays" > "$csv"
