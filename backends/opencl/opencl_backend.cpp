@@ -300,7 +300,7 @@ struct ShapeData {
     source_leaves.resize(origins.size(), 0);
     for (uint32_t n = 0; n < rs.nodes.size(); ++n)
       if (rs.nodes[n].child == 0)
-        for (uint32_t k = rs.nodes[n].begin; k < rs.nodes[n].end; ++k) source_leaves[d.first_source + rs.order[k]] = n;
+        for (uint32_t v : rs.origins_of(n)) source_leaves[d.first_source + v] = n;
     if (const Mesh* mesh = shape.mesh()) {
       d.kind = RTCD_TARGET_MESH;
       d.triangle_count = rtcd_uint(mesh->triangle_count());
@@ -609,7 +609,7 @@ class OpenClExecutor final : public RayExecutor {
     size_t origins = 0;
     visit_near_leaves(job, rs, [&](uint32_t n) {
       bits[n / 32] |= rtcd_uint(1) << (n % 32);
-      origins += rs.nodes[n].end - rs.nodes[n].begin;
+      origins += rs.origins_of(n).size();
     });
     return origins;
   }

@@ -67,7 +67,9 @@ TEST(Shape, SourceTreeReachesEveryOriginInABoxOnce) {
             return (hi.cast<double>().array() >= box.min.array()).all() &&
                    (lo.cast<double>().array() <= box.max.array()).all();
           },
-          [&](uint32_t v) { ++found[v]; });
+          [&](uint32_t n) {
+            for (uint32_t v : rs.origins_of(n)) ++found[v];
+          });
       for (size_t v = 0; v < rs.origins.size(); ++v) {
         ASSERT_LE(found[v], 1) << "origin " << v << ", trial " << trial;
         const bool in = box.contains(rs.origins[v].cast<double>());

@@ -63,7 +63,7 @@ void visit_near_leaves(const RayJob& job, const RaySources& sources, const Visit
     const Eigen::Vector3d half = spread * (0.5 * (hi.cast<double>() - lo.cast<double>()));
     return ((centre + half).array() >= box.min.array()).all() && ((centre - half).array() <= box.max.array()).all();
   };
-  sources.visit_leaf_nodes(may_hold, visit_node);
+  sources.visit_leaves(may_hold, visit_node);
 }
 
 // Calls visit(v) for each origin of the leaves visit_near_leaves reaches:
@@ -71,7 +71,7 @@ void visit_near_leaves(const RayJob& job, const RaySources& sources, const Visit
 template <class Visit>
 void visit_near_origins(const RayJob& job, const RaySources& sources, const Visit& visit) {
   visit_near_leaves(job, sources, [&](uint32_t n) {
-    for (uint32_t k = sources.nodes[n].begin; k < sources.nodes[n].end; ++k) visit(sources.order[k]);
+    for (uint32_t v : sources.origins_of(n)) visit(v);
   });
 }
 

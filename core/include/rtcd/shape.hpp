@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <variant>
 #include <vector>
 
@@ -50,26 +51,20 @@ struct RaySources {
 
   // Builds the tree over the origins; called once they are all in.
   void index();
-  // Calls visit(v) for every origin v of the leaves reached through nodes
-  // whose box passes may_hold(lo, hi): a test that may pass a box holding
-  // no wanted origin but never fails one holding one. Each origin at most
-  // once, in no particular order.
-  template <class MayHold, class Visit>
-  void visit_leaves(const MayHold& may_hold, const Visit& visit) const;
-  // The same walk, calling visit_node(n) once per leaf nodes[n] reached.
-  template <class MayHold, class VisitNode>
-  void visit_leaf_nodes(const MayHold& may_hold, const VisitNode& visit_node) const;
+  // Calls visit_leaf(n) for every leaf nodes[n] reached through nodes whose
+  // box passes may_hold(lo, hi): a test that may pass a box holding no
+  // wanted origin but never fails one holding one. Each leaf at most once,
+  // in no particular order.
+  template <class MayHold, class VisitLeaf>
+  void visit_leaves(const MayHold& may_hold, const VisitLeaf& visit_leaf) const;
+  // The origins of node n.
+  std::span<const uint32_t> origins_of(uint32_t n) const {
+    return {order.data() + nodes[n].begin, nodes[n].end - nodes[n].begin};
+  }
 };
 
-template <class MayHold, class Visit>
-void RaySources::visit_leaves(const MayHold& may_hold, const Visit& visit) const {
-  visit_leaf_nodes(may_hold, [&](uint32_t n) {
-    for (uint32_t k = nodes[n].begin; k < nodes[n].end; ++k) visit(order[k]);
-  });
-}
-
-template <class MayHold, class VisitNode>
-void RaySources::visit_leaf_nodes(const MayHold& may_hold, const VisitNode& visit_node) const {
+template <class MayHold, class VisitLeaf>
+void RaySources::visit_leaves(const MayHold& may_hold, const VisitLeaf& visit_leaf) const {
   if (nodes.empty()) return;
   uint32_t stack[64];  // depth <= log2(origins) + 1 for median splits
   int top = 0;
@@ -83,7 +78,7 @@ void RaySources::visit_leaf_nodes(const MayHold& may_hold, const VisitNode& visi
       stack[top++] = n.child + 1;
       continue;
     }
-    visit_node(index);
+    visit_leaf(index);
   }
 }
 
