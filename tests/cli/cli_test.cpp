@@ -234,9 +234,20 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   ASSERT_NE(all, std::string::npos) << full.out;
   EXPECT_NE(full.out.find("| 100.0% | 0.0% |", all), std::string::npos) << full.out;
   EXPECT_NE(full.out.find("| 6: ", all), std::string::npos) << full.out;
+  // Automatic mode with a small threshold: equation 2.1 sends pairs back,
+  // never more than are traced in full.
   const Outcome automatic = run("replay " + recording + " --displacement-threshold 0.01");
   ASSERT_EQ(automatic.code, 0) << automatic.out;
   EXPECT_NE(automatic.out.find("mode auto, 1 thread;"), std::string::npos) << automatic.out;
+  const size_t row = automatic.out.find("| all | 60 |");
+  ASSERT_NE(row, std::string::npos) << automatic.out;
+  std::vector<std::string> cells;
+  std::stringstream line(automatic.out.substr(row + 1, automatic.out.find('\n', row) - row - 1));
+  for (std::string cell; std::getline(line, cell, '|');) cells.push_back(cell);
+  ASSERT_GE(cells.size(), 11u) << automatic.out;
+  const double traced_in_full = std::stod(cells[9]), sent_back = std::stod(cells[10]);
+  EXPECT_GT(sent_back, 0.0) << automatic.out;
+  EXPECT_LE(sent_back, traced_in_full) << automatic.out;
 
   const std::string junk = write("junk.rtcdrec", "RTCDREC1 and then nothing sensible");
   for (const auto& [args, fragment] : std::vector<std::pair<std::string, std::string>>{
