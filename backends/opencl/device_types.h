@@ -40,7 +40,7 @@ RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* bits, rtcd_uint leaf
   return (int)((bits[leaf / 32] >> (leaf % 32)) & 1u);
 }
 
-/* rtcd::TrackedRay. */
+/* A tracked ray on a device: the walk-start fields of the rtcd_outcome that kept it. */
 typedef struct {
   rtcd_uint vertex;
   rtcd_int triangle;

@@ -46,7 +46,6 @@ extern const char* const kKernels;
 
 namespace {
 
-static_assert(sizeof(rtcd_tracked) == sizeof(TrackedRay));
 static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // The kernels read the buffers with OpenCL C's layout of the same structs:
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
@@ -586,8 +585,7 @@ class OpenClExecutor final : public RayExecutor {
     } else {
       dj.first_tracked = d.upload_base + rtcd_uint(d.host_tracked.size());
       if (job.iterative && items > 0) {
-        const auto* tracked = reinterpret_cast<const rtcd_tracked*>(job.tracked.data());
-        d.host_tracked.insert(d.host_tracked.end(), tracked, tracked + job.tracked.size());
+        for (const RayOutcome& r : job.tracked) d.host_tracked.push_back({r.vertex, r.triangle, r.entry});
       }
     }
     d.batch_jobs.push_back(j);

@@ -175,7 +175,7 @@ class CpuExecutor final : public RayExecutor {
     if (job.overlap.empty()) return;
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
-    for (const TrackedRay& r : job.tracked) place(rs, frame, r.vertex, r.triangle, r.entry, take);
+    for (const RayOutcome& r : job.tracked) place(rs, frame, r.vertex, r.triangle, r.entry, take);
   }
 
   // A full job's candidates, in vertex order: the origins near the overlap

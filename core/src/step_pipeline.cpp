@@ -142,7 +142,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   };
   struct PairState {
     Pose relative_at_full;               // lower id's frame in the higher id's frame
-    std::vector<TrackedRay> tracked[2];  // [0]: lower id's rays into the higher, [1]: the reverse
+    std::vector<RayOutcome> tracked[2];  // last kept outcomes; [0]: lower id's rays into the higher, [1]: the reverse
     Residence residence[2];              // where the executor keeps them, in the same order
   };
   // A pair's step: its state and limits, and where its two jobs are:
@@ -164,7 +164,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void place(RayJob& job, BodyId source, BodyId target) const;
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
-            Contact*& contacts, PredictiveRay*& predictive, std::vector<TrackedRay>& tracked) const;
+            Contact*& contacts, PredictiveRay*& predictive) const;
 
   std::string name_;
   std::vector<std::string> devices_;
@@ -346,7 +346,8 @@ void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const
 }
 
 // Ranges per pair in input order (a's rays, then b's), then every record
-// filled in parallel and the tracked rays mirrored from the kept outcomes.
+// filled in parallel, and the kept outcomes handed to the pair's state as
+// its tracked rays.
 void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& out) {
   size_t outcomes = 0, contacts = 0, predictive = 0;
   RayTally step;
@@ -387,25 +388,28 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     PredictiveRay* ahead = out.predictive.data() + pr.first_predictive;
     for (uint32_t k = 0; k < 2; ++k) {
       const BodyId source = k == 0 ? p.a : p.b, target = k == 0 ? p.b : p.a;
-      fill(jobs_[w.list][w.first + k], outcomes_[w.list][w.first + k], source, target, k == 0 ? Side::a : Side::b,
-           contact, ahead, w.state->tracked[source < target ? 0 : 1]);
+      std::vector<RayOutcome>& kept = outcomes_[w.list][w.first + k];
+      const RayTally& tally = tallies_[w.list][w.first + k];
+      // Most jobs of a settled pile report nothing and only track.
+      if (tally.contacts + tally.predictive > 0)
+        fill(jobs_[w.list][w.first + k], kept, source, target, k == 0 ? Side::a : Side::b, contact, ahead);
+      // The kept outcomes become the tracked rays; the slot takes the old
+      // ones' buffer for a later step.
+      kept.swap(w.state->tracked[source < target ? 0 : 1]);
     }
     for (const Contact& contact : out.contacts_of(pr)) pr.max_depth = std::max(pr.max_depth, contact.depth);
   });
 }
 
 void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source_id,
-                               BodyId target_id, Side side, Contact*& contacts, PredictiveRay*& predictive,
-                               std::vector<TrackedRay>& tracked) const {
+                               BodyId target_id, Side side, Contact*& contacts, PredictiveRay*& predictive) const {
   const Body& src = bodies_[source_id];
   const Body& dst = bodies_[target_id];
   const ShapeEntry& source = shapes_[src.shape];
   const ShapeEntry& target = shapes_[dst.shape];
   const Eigen::Matrix3d source_rotation = src.pose.orientation.toRotationMatrix();
   const Eigen::Matrix3d target_rotation = dst.pose.orientation.toRotationMatrix();
-  tracked.clear();
   for (const RayOutcome& o : outcomes) {
-    tracked.push_back({o.vertex, o.triangle, o.entry});
     if (o.kind == RTCD_RAY_WATCHED) continue;
     const Eigen::Vector3d origin = source.shape->sources().origins[o.vertex].cast<double>();
     const Eigen::Vector3d& direction = source.directions[o.vertex];

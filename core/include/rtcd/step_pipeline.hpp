@@ -18,15 +18,16 @@
 
 namespace rtcd {
 
-// A ray the walk follows from one step to the next: the host's mirror of a
-// pair-direction's tracked rays, rebuilt from every step's outcomes, so any
-// executor can take over a pair without tracing it again.
-struct TrackedRay {
-  uint32_t vertex;
-  int32_t triangle;  // where the next walk starts (the exit face of a penetrating ray); -1: a
-                     // watched vertex whose nearest triangle is looked up when the pair walks
-  int32_t entry;     // penetrating rays: the face the line enters through behind the vertex; -1 unknown
-};
+// What one candidate ray found: the kernel's record (kernel/tracer.h), so
+// executors write it where the rays run and the host reads it as it is. `t`
+// is the kernel's float distance; the host refines reported rays in double.
+// A step's kept outcomes are also the pair-direction's tracked rays, the
+// walks' start for the next step (vertex, `triangle`: the exit face or where
+// the walk starts, -1 for a watched vertex whose nearest triangle is looked
+// up when the pair walks; `entry`: a penetrating ray's entry face, -1
+// unknown). The host keeps them with the pair's state, so any executor can
+// take over a pair without tracing it again.
+using RayOutcome = rtcd_outcome;
 
 // Where an executor left a pair-direction's tracked rays after a step (on
 // the device that ran it, say), so the next step's walks run there without
@@ -50,8 +51,8 @@ struct RayJob {
   Aabb overlap;
   bool iterative = false;
   PairLimits limits;
-  // Iterative jobs: last step's rays, the walks' start triangles.
-  std::span<const TrackedRay> tracked;
+  // Iterative jobs: last step's kept outcomes, the walks' start triangles.
+  std::span<const RayOutcome> tracked;
   // The pair-direction's note for the executor, read and written by it;
   // null: none is kept.
   Residence* residence = nullptr;
@@ -61,11 +62,6 @@ struct RayJob {
 struct Transfers {
   size_t to_device = 0, from_device = 0;
 };
-
-// What one candidate ray found: the kernel's record (kernel/tracer.h), so
-// executors write it where the rays run and the host reads it as it is. `t`
-// is the kernel's float distance; the host refines reported rays in double.
-using RayOutcome = rtcd_outcome;
 
 // A job's rays summed up: its records (contacts, predictive rays) and its
 // share of the step's statistics.
