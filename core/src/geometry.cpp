@@ -130,6 +130,20 @@ void Config::validate() const {
 
 const char* to_string(PairMode mode) { return mode == PairMode::full ? "full" : "iterative"; }
 
+RayCounts& RayCounts::operator+=(const RayCounts& o) {
+  candidates += o.candidates;
+  rays_full += o.rays_full;
+  rays_predictive += o.rays_predictive;
+  rays_iterative += o.rays_iterative;
+  walk_steps += o.walk_steps;
+  nearest_queries += o.nearest_queries;
+  rays_retraced += o.rays_retraced;
+  rays_watched += o.rays_watched;
+  fold_casts += o.fold_casts;
+  for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) walk_endings[e] += o.walk_endings[e];
+  return *this;
+}
+
 const char* line_status_name(int status) {
   static const char* names[RTCD_LINE_STATUS_COUNT] = {"hit",  "behind",     "front",   "boundary",
                                                       "miss", "step_limit", "parallel"};

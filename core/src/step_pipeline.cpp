@@ -366,17 +366,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     outcomes += outcomes_[w.list][w.first].size() + outcomes_[w.list][w.first + 1].size();
     step += pair;
   }
-  StepStats& s = out.stats;
-  s.candidates = step.candidates;
-  s.rays_full = step.rays_full;
-  s.rays_predictive = step.rays_predictive;
-  s.rays_iterative = step.rays_iterative;
-  s.walk_steps = step.walk_steps;
-  s.nearest_queries = step.nearest_queries;
-  s.rays_retraced = step.rays_retraced;
-  s.rays_watched = step.rays_watched;
-  s.fold_casts = step.fold_casts;
-  s.walk_endings = step.endings;
+  static_cast<RayCounts&>(out.stats) = step;
   out.contacts.resize(contacts);
   out.predictive.resize(predictive);
 
@@ -443,18 +433,9 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
 }  // namespace
 
 RayTally& RayTally::operator+=(const RayTally& o) {
+  RayCounts::operator+=(o);
   contacts += o.contacts;
   predictive += o.predictive;
-  candidates += o.candidates;
-  rays_full += o.rays_full;
-  rays_predictive += o.rays_predictive;
-  rays_iterative += o.rays_iterative;
-  walk_steps += o.walk_steps;
-  nearest_queries += o.nearest_queries;
-  rays_retraced += o.rays_retraced;
-  rays_watched += o.rays_watched;
-  fold_casts += o.fold_casts;
-  for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) endings[e] += o.endings[e];
   return *this;
 }
 

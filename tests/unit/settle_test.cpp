@@ -42,7 +42,7 @@ TEST(Settle, DropsWhatReportsAndTracksNothingKeepingTheOrder) {
   EXPECT_EQ(t.rays_iterative, 6u);
   EXPECT_EQ(t.rays_full, 0u);
   EXPECT_EQ(t.walk_steps, 12u);
-  EXPECT_EQ(t.endings[RTCD_LINE_HIT], 6u);
+  EXPECT_EQ(t.walk_endings[RTCD_LINE_HIT], 6u);
   EXPECT_EQ(t.contacts, 1u);
   EXPECT_EQ(t.predictive, 1u);
   EXPECT_EQ(t.rays_watched, 1u);
@@ -54,7 +54,7 @@ TEST(Settle, DropsWhatReportsAndTracksNothingKeepingTheOrder) {
   EXPECT_EQ(sum.candidates, 12u);
   EXPECT_EQ(sum.rays_full, 6u);
   EXPECT_EQ(sum.rays_iterative, 6u);
-  EXPECT_EQ(sum.endings[RTCD_LINE_HIT], 6u);
+  EXPECT_EQ(sum.walk_endings[RTCD_LINE_HIT], 6u);
 }
 
 TEST(Settle, KeepsEveryOutcomeOfAWalkThatDropsNone) {

@@ -67,19 +67,26 @@ struct PairResult {
   size_t first_predictive = 0, predictive_count = 0;
 };
 
-struct StepStats {
-  size_t pairs_full = 0, pairs_iterative = 0;
-  size_t fallbacks_to_full = 0;  // pairs with state sent back to full by equation 2.1
-  size_t candidates = 0;         // ray origins inside the grown bounding-box overlap
-  size_t rays_full = 0;          // inward rays traced in full steps
-  size_t rays_predictive = 0;    // outward predictive rays traced (full steps and re-traces)
-  size_t rays_iterative = 0;     // tracked rays walked in iterative steps
-  size_t walk_steps = 0;         // triangles located by all walks
-  size_t nearest_queries = 0;    // nearest-triangle queries for vertices neither ray met
-  size_t rays_retraced = 0;      // walked rays whose walks could not tell inside from outside, traced again
-  size_t rays_watched = 0;       // tracked rays that reported nothing (vertices near the target)
-  size_t fold_casts = 0;         // walked contacts whose fold check cast a ray (beyond their face's clearance)
+// The step's rays by what they did: summed per job by the executors
+// (RayTally) and per step by the pipeline.
+struct RayCounts {
+  size_t candidates = 0;       // ray origins inside the grown bounding-box overlap
+  size_t rays_full = 0;        // inward rays traced in full steps
+  size_t rays_predictive = 0;  // outward predictive rays traced (full steps and re-traces)
+  size_t rays_iterative = 0;   // tracked rays walked in iterative steps
+  size_t walk_steps = 0;       // triangles located by all walks
+  size_t nearest_queries = 0;  // nearest-triangle queries for vertices neither ray met
+  size_t rays_retraced = 0;    // walked rays whose walks could not tell inside from outside, traced again
+  size_t rays_watched = 0;     // tracked rays that reported nothing (vertices near the target)
+  size_t fold_casts = 0;       // walked contacts whose fold check cast a ray (beyond their face's clearance)
   std::array<size_t, RTCD_LINE_STATUS_COUNT> walk_endings{};  // iterative rays by rtcd_line_status
+
+  RayCounts& operator+=(const RayCounts& other);
+};
+
+struct StepStats : RayCounts {
+  size_t pairs_full = 0, pairs_iterative = 0;
+  size_t fallbacks_to_full = 0;                               // pairs with state sent back to full by equation 2.1
   size_t bytes_to_device = 0, bytes_from_device = 0;          // host <-> device traffic (0 on the CPU)
   double seconds_prepare = 0, seconds_full = 0, seconds_iterative = 0, seconds_gather = 0;
 };

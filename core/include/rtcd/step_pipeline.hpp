@@ -65,11 +65,8 @@ struct Transfers {
 
 // A job's rays summed up: its records (contacts, predictive rays) and its
 // share of the step's statistics.
-struct RayTally {
+struct RayTally : RayCounts {
   size_t contacts = 0, predictive = 0;
-  size_t candidates = 0, rays_full = 0, rays_predictive = 0, rays_iterative = 0, walk_steps = 0;
-  size_t nearest_queries = 0, rays_retraced = 0, rays_watched = 0, fold_casts = 0;
-  std::array<size_t, RTCD_LINE_STATUS_COUNT> endings{};
 
   void count(const RayOutcome& o, bool iterative) {
     ++candidates;
@@ -83,7 +80,7 @@ struct RayTally {
     if (iterative) {
       ++rays_iterative;
       walk_steps += o.walk_steps;
-      ++endings[o.status];
+      ++walk_endings[o.status];
     } else {
       ++rays_full;
     }
