@@ -7,7 +7,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 recording=${1:?usage: bench/threshold_sweep.sh RECORDING [OUT]}
-out=${2:-docs/results/avalanche-threshold}
+out=${2:-docs/results/threshold-sweep}
 rtcd=./build/release/bin/rtcd
 mkdir -p "$out"
 
