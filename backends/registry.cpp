@@ -36,7 +36,7 @@ namespace {
 CpuFallback opencl_fallback(const std::string& name) {
   if (name.rfind("opencl-basic", 0) == 0) return {"basic", make_basic_tracers};
 #ifdef RTCD_WITH_EMBREE
-  return {"embree", make_embree_tracers};
+  return {"embree", [] { return make_embree_tracers(); }};
 #else
   return {"basic", make_basic_tracers};
 #endif
@@ -61,7 +61,7 @@ std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Co
   if (is_opencl_name(chosen)) return make_opencl_narrow_phase(chosen, config, opencl_fallback(chosen));
 #endif
 #ifdef RTCD_WITH_EMBREE
-  if (chosen == "embree" && usable("embree")) return make_embree_narrow_phase(config);
+  if (is_embree_name(chosen) && usable("embree")) return make_embree_narrow_phase(chosen, config);
 #endif
   std::ostringstream s;
   s << "backend '" << name << "' is not available; available:";

@@ -58,6 +58,32 @@ void print_row(const std::string& name, const Sum& s) {
   }
 }
 
+// Where the rays ran, for a device backend: each device's share, and the
+// first step that fell back to the CPU, with why.
+void print_devices(const experiments::ReplayRun& run) {
+  std::vector<size_t> rays;
+  const experiments::ReplayStep* fallback = nullptr;
+  uint64_t fallback_step = 0;
+  for (uint64_t k = 0; k < run.steps.size(); ++k) {
+    const experiments::ReplayStep& s = run.steps[k];
+    rays.resize(std::max(rays.size(), s.device_rays.size()));
+    for (size_t d = 0; d < s.device_rays.size(); ++d) rays[d] += s.device_rays[d];
+    if (!fallback && !s.cpu_fallback.empty()) {
+      fallback = &s;
+      fallback_step = k;
+    }
+  }
+  if (rays.empty() && !fallback) return;  // a CPU backend
+  std::printf("\nRays by device:");
+  for (size_t d = 0; d < rays.size(); ++d) std::printf(" [%zu] %zu", d, rays[d]);
+  if (fallback) {
+    std::printf("; fell back to the CPU from step %llu: %s\n", static_cast<unsigned long long>(fallback_step),
+                fallback->cpu_fallback.c_str());
+  } else {
+    std::printf("; no step fell back to the CPU\n");
+  }
+}
+
 }  // namespace
 
 int run_replay(const ReplayOptions& o) {
@@ -95,6 +121,7 @@ int run_replay(const ReplayOptions& o) {
   }
   for (uint64_t k = 0; k < run.steps.size(); ++k) all.add(k, run.steps[k]);
   print_row("all", all);
+  print_devices(run);
   std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats); sent back: pairs traced in full because equation 2.1 ended their walks (the others traced in full are new).\n");
   return 0;
 }

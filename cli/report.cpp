@@ -20,6 +20,8 @@ nlohmann::json record(const RayRecord& r) {
 nlohmann::json stats_json(const StepStats& s) {
   nlohmann::json endings;
   for (int i = 0; i < RTCD_LINE_STATUS_COUNT; ++i) endings[line_status_name(i)] = s.walk_endings[i];
+  nlohmann::json devices = nlohmann::json::array();
+  for (const DeviceWork& d : s.devices) devices.push_back({{"jobs", d.jobs}, {"rays", d.rays}});
   return {{"pairs_full", s.pairs_full},
           {"pairs_iterative", s.pairs_iterative},
           {"fallbacks_to_full", s.fallbacks_to_full},
@@ -35,6 +37,8 @@ nlohmann::json stats_json(const StepStats& s) {
           {"fold_casts", s.fold_casts},
           {"bytes_to_device", s.bytes_to_device},
           {"bytes_from_device", s.bytes_from_device},
+          {"devices", devices},
+          {"cpu_fallback", s.cpu_fallback.empty() ? nlohmann::json() : nlohmann::json(s.cpu_fallback)},
           {"seconds", {{"prepare", s.seconds_prepare},
                        {"full", s.seconds_full},
                        {"iterative", s.seconds_iterative},

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cstdio>
 #include <ctime>
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -102,6 +103,8 @@ int run_scene(const RunOptions& o) {
     double pairs = 0, rays = 0, contacts = 0;
   } totals;
   double rss_at_1000 = -1;
+  std::vector<size_t> device_rays;  // summed over the steps
+  nlohmann::json cpu_fallback;      // the first step that fell back, and why; null: none did
   std::string failure;
   Progress progress(scene.steps);
   const auto start = Clock::now();
@@ -117,6 +120,10 @@ int run_scene(const RunOptions& o) {
       totals.pairs += double(r.pairs);
       totals.rays += double(r.rays_full + r.rays_predictive + r.rays_iterative);
       totals.contacts += double(r.contacts);
+      device_rays.resize(std::max(device_rays.size(), r.device_rays.size()));
+      for (size_t d = 0; d < r.device_rays.size(); ++d) device_rays[d] += r.device_rays[d];
+      if (cpu_fallback.is_null() && !r.cpu_fallback.empty())
+        cpu_fallback = {{"step", r.step}, {"reason", r.cpu_fallback}};
       if (snapshot_at.contains(i)) {
         const fs::path png = dir / ("snapshot_" + std::to_string(i) + ".png");
         sim::write_png(png.string(), simulation.snapshot(scene.snapshot_width, scene.snapshot_height));
@@ -159,6 +166,8 @@ int run_scene(const RunOptions& o) {
         {"interpenetration_every", scene.interpenetration_every}}},
       {"backend", simulation.backend()},
       {"devices", simulation.devices()},
+      {"device_rays", device_rays},
+      {"cpu_fallback", cpu_fallback},
       {"threads", thread_count},
       {"build_type", RTCD_BUILD_TYPE},
       {"machine", {{"cpu", machine()}, {"cores", std::thread::hardware_concurrency()}}},
@@ -176,13 +185,13 @@ int run_scene(const RunOptions& o) {
         {"final_kinetic_energy", last.kinetic_energy},
         {"state_hash", simulation.state_hash()},
         {"peak_rss_mib", peak_rss_mib()}}},
-      {"stage_runs",
-       {{"gravity", c.gravity},
-        {"narrow_phase", c.narrow_phase},
-        {"friction", c.friction},
-        {"restitution", c.restitution},
-        {"speculative", c.speculative},
-        {"interpenetration", c.interpenetration},
+      {"stage_work",
+       {{"gravity_forces", c.gravity_forces},
+        {"narrow_phase_batches", c.narrow_phase_batches},
+        {"friction_points", c.friction_points},
+        {"restitution_points", c.restitution_points},
+        {"speculative_points", c.speculative_points},
+        {"interpenetration_passes", c.interpenetration_passes},
         {"snapshots", c.snapshots}}},
       {"snapshots", pictures},
   };

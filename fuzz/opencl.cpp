@@ -5,6 +5,7 @@
 // context and its built program live for the whole run (the backend keeps
 // one per device set), so an input costs a narrow phase, not a driver
 // start. PoCL's CPU devices serve (scripts/fuzz.sh sets POCL_DEVICES).
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -62,6 +63,24 @@ void require_same(const StepResult& x, const StepResult& y, const std::string& w
                 where + ": different statistics");
 }
 
+// The device ran the step, not the CPU fallback (whose answers equal
+// `basic` by design): no fallback, every candidate ray on a device, and the
+// first step's jobs (no pair state yet, so none is tied to a device) spread
+// over as many devices as there are jobs.
+void require_on_devices(const StepResult& step, bool first, const std::string& where) {
+  const StepStats& s = step.stats;
+  fuzz::require(s.cpu_fallback.empty(), where + ": fell back to the CPU: " + s.cpu_fallback);
+  fuzz::require(!s.devices.empty(), where + ": no device work reported");
+  size_t rays = 0, jobs = 0, busy = 0;
+  for (const DeviceWork& d : s.devices) {
+    rays += d.rays;
+    jobs += d.jobs;
+    busy += d.jobs > 0;
+  }
+  fuzz::require(rays == s.candidates, where + ": " + std::to_string(s.candidates - rays) + " rays not run on a device");
+  if (first) fuzz::require(busy == std::min(jobs, s.devices.size()), where + ": jobs left on one device");
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
@@ -69,6 +88,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
   if (!input) return 0;
   const std::vector<StepResult> device = fuzz::run_pair_case(*input, "opencl-basic");
   const std::vector<StepResult> cpu = fuzz::run_pair_case(*input, "basic");
-  for (int s = 0; s < input->steps; ++s) require_same(device[s], cpu[s], "step " + std::to_string(s));
+  for (int s = 0; s < input->steps; ++s) {
+    require_on_devices(device[s], s == 0, "step " + std::to_string(s));
+    require_same(device[s], cpu[s], "step " + std::to_string(s));
+  }
   return 0;
 }

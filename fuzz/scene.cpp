@@ -1,10 +1,13 @@
 // libFuzzer harness: scene files through the scene loader, then a few steps
 // of the simulation. File access is stubbed (every mesh path "exists" and is
 // simulated as a box of its scale), bodies and steps are capped, pictures are
-// tiny. SceneError is the accepted rejection; rtcd::Error (a size or config
-// out of range) and SimulationError (a blow-up, named) are accepted ends. A
-// stage whose effect is not listed must never run, and every pose after a
-// step must be finite.
+// tiny. What a bad scene file may cause, and nothing else, ends an input:
+// SceneError from the loader (the one rejection), and SimulationError from a
+// step (a blow-up, named: a scene can ask for one, a body of 1e-40 kg).
+// Any other exception, from building the simulation or from a step, is a
+// finding: the loader accepted a scene the simulation cannot run, or the
+// library failed on its own. A stage whose effect is not listed must do no
+// work, and every pose after a step must be finite.
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -39,12 +42,13 @@ void run(rtcd::sim::Scene scene) {
     }
   }
   const auto& c = sim.counters();
-  require(scene.has(Effect::gravity) || c.gravity == 0, "gravity ran unlisted");
-  require(scene.has(Effect::contacts) || c.narrow_phase == 0, "narrow phase ran without contacts");
-  require(scene.has(Effect::friction) || c.friction == 0, "friction ran unlisted");
-  require(scene.has(Effect::restitution) || c.restitution == 0, "restitution ran unlisted");
-  require(scene.has(Effect::speculative) || c.speculative == 0, "speculative ran unlisted");
-  require(scene.has(Effect::interpenetration) || c.interpenetration == 0, "interpenetration ran unlisted");
+  require(scene.has(Effect::gravity) || c.gravity_forces == 0, "gravity applied unlisted");
+  require(scene.has(Effect::contacts) || c.narrow_phase_batches == 0, "narrow phase ran without contacts");
+  require(!scene.has(Effect::contacts) || c.narrow_phase_batches == scene.steps, "narrow phase skipped a step");
+  require(scene.has(Effect::friction) || c.friction_points == 0, "points with friction, unlisted");
+  require(scene.has(Effect::restitution) || c.restitution_points == 0, "points with restitution, unlisted");
+  require(scene.has(Effect::speculative) || c.speculative_points == 0, "speculative points, unlisted");
+  require(scene.has(Effect::interpenetration) || c.interpenetration_passes == 0, "interpenetration ran unlisted");
   require(c.steps == scene.steps, "steps miscounted");
 }
 
@@ -64,7 +68,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   try {
     run(std::move(scene));
   } catch (const rtcd::sim::SimulationError&) {
-  } catch (const rtcd::Error&) {
+  } catch (const std::exception& e) {
+    rtcd::fuzz::violated(std::string("a loaded scene threw: ") + e.what());
   }
   return 0;
 }

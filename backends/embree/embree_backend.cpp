@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <string>
+#include <vector>
 
 #include <embree3/rtcore.h>
 
@@ -16,9 +18,30 @@
 namespace rtcd {
 namespace {
 
+// The instruction sets an Embree device can be pinned to, by the name its
+// configuration takes, and whether this CPU runs them.
+struct Isa {
+  const char* name;
+  bool supported;
+};
+
+std::vector<Isa> isas() {
+  __builtin_cpu_init();
+  return {{"sse2", bool(__builtin_cpu_supports("sse2"))},
+          {"sse4.2", bool(__builtin_cpu_supports("sse4.2"))},
+          {"avx", bool(__builtin_cpu_supports("avx"))},
+          {"avx2", bool(__builtin_cpu_supports("avx2"))},
+          // Embree's AVX-512 kernels are Skylake-X's subset.
+          {"avx512", __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+                         __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("avx512dq") &&
+                         __builtin_cpu_supports("avx512cd")}};
+}
+
+// `isa` empty: Embree picks the widest set it was built for that the CPU runs.
 struct DeviceHandle {
   RTCDevice device;
-  DeviceHandle() : device(rtcNewDevice(nullptr)) {
+  explicit DeviceHandle(const std::string& isa)
+      : device(rtcNewDevice(isa.empty() ? nullptr : ("isa=" + isa).c_str())) {
     if (device == nullptr) throw BackendError("embree: cannot create a device (error " + std::to_string(rtcGetDeviceError(nullptr)) + ")");
   }
   ~DeviceHandle() { rtcReleaseDevice(device); }
@@ -128,7 +151,7 @@ class EmbreeTracer final : public MeshTracer {
 
 class EmbreeTracerFactory final : public MeshTracerFactory {
  public:
-  EmbreeTracerFactory() : device_(std::make_shared<DeviceHandle>()) {}
+  explicit EmbreeTracerFactory(const std::string& isa) : device_(std::make_shared<DeviceHandle>(isa)) {}
   std::unique_ptr<MeshTracer> build(const Mesh& mesh) const override {
     return std::make_unique<EmbreeTracer>(device_, mesh);
   }
@@ -139,18 +162,46 @@ class EmbreeTracerFactory final : public MeshTracerFactory {
 
 }  // namespace
 
-std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const Config& config) {
-  return make_pipeline_narrow_phase("embree", {embree_description()},
-                                    make_cpu_executor(make_embree_tracers()), config);
+bool is_embree_name(const std::string& name) { return name == "embree" || name.rfind("embree:", 0) == 0; }
+
+std::string embree_isa(const std::string& name) {
+  if (name == "embree") return "";
+  const std::string option = "embree:isa=";
+  std::string known;
+  for (const Isa& isa : isas()) known += std::string(known.empty() ? "" : ", ") + isa.name;
+  if (name.rfind(option, 0) != 0)
+    throw BackendError("backend '" + name + "': embree takes one option, isa=NAME (" + known + ")");
+  const std::string wanted = name.substr(option.size());
+  for (const Isa& isa : isas())
+    if (wanted == isa.name) {
+      if (!isa.supported) throw BackendError("backend '" + name + "': this CPU does not run " + wanted);
+      return wanted;
+    }
+  throw BackendError("backend '" + name + "': unknown instruction set '" + wanted + "' (" + known + ")");
 }
 
-std::unique_ptr<MeshTracerFactory> make_embree_tracers() { return std::make_unique<EmbreeTracerFactory>(); }
+std::vector<std::string> embree_isas_here() {
+  std::vector<std::string> names;
+  for (const Isa& isa : isas())
+    if (isa.supported) names.push_back(isa.name);
+  return names;
+}
 
-std::string embree_description() {
-  DeviceHandle d;
+std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const std::string& name, const Config& config) {
+  const std::string isa = embree_isa(name);
+  return make_pipeline_narrow_phase(name, {embree_description(isa)}, make_cpu_executor(make_embree_tracers(isa)),
+                                    config);
+}
+
+std::unique_ptr<MeshTracerFactory> make_embree_tracers(const std::string& isa) {
+  return std::make_unique<EmbreeTracerFactory>(isa);
+}
+
+std::string embree_description(const std::string& isa) {
+  DeviceHandle d(isa);
   const long version = long(rtcGetDeviceProperty(d.device, RTC_DEVICE_PROPERTY_VERSION));
   return "cpu (Embree " + std::to_string(version / 10000) + "." + std::to_string(version / 100 % 100) + "." +
-         std::to_string(version % 100) + ", TBB)";
+         std::to_string(version % 100) + ", TBB" + (isa.empty() ? "" : ", " + isa + " only") + ")";
 }
 
 }  // namespace rtcd

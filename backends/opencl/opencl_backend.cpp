@@ -365,6 +365,7 @@ struct Device {
   uint32_t kept_base = 0;          // this batch's kept rays in the written buffer
   bool keeps = false;              // some job of the batch keeps a residence
   Transfers moved;
+  DeviceWork work;  // this step's, over its batches
   // This batch: the jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
@@ -429,7 +430,11 @@ class OpenClExecutor final : public RayExecutor {
 
   void begin_step() override {
     ++step_;
-    for (Device& d : devices_) d.kept_used[step_ % 2] = 0;
+    on_cpu_ = false;
+    for (Device& d : devices_) {
+      d.kept_used[step_ % 2] = 0;
+      d.work = {};
+    }
   }
 
   Transfers execute(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
@@ -443,7 +448,14 @@ class OpenClExecutor final : public RayExecutor {
         fail(e.what());
       }
     }
+    on_cpu_ = true;
     return cpu().execute(jobs, config, outcomes, tallies);
+  }
+
+  void account(StepStats& stats) const override {
+    stats.devices.resize(devices_.size());
+    for (size_t i = 0; i < devices_.size(); ++i) stats.devices[i] = devices_[i].work;
+    if (on_cpu_) stats.cpu_fallback = fault_message_;
   }
 
  private:
@@ -885,10 +897,11 @@ class OpenClExecutor final : public RayExecutor {
   // Device i's jobs' outcomes into their slots, settled, and where their
   // kept rays are, for the next step.
   void deliver(uint32_t i, std::span<const RayJob> jobs, std::span<std::vector<RayOutcome>> outcomes,
-               std::span<RayTally> tallies) const {
-    const Device& d = devices_[i];
+               std::span<RayTally> tallies) {
+    Device& d = devices_[i];
     for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
       const RayJob& job = jobs[d.batch_jobs[l]];
+      d.work.jobs += d.host_jobs[l].item_count > 0;
       std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
       if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
         if (job.residence && runtime_->place_on_device) *job.residence = {step_, i, 0};
@@ -898,6 +911,7 @@ class OpenClExecutor final : public RayExecutor {
           *job.residence = {step_, i, d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l])};
         const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
         out.assign(first, first + d.host_counts[l]);
+        d.work.rays += d.host_counts[l];
       }
       tallies[d.batch_jobs[l]] = settle_outcomes(out, job.iterative);
     }
@@ -916,6 +930,7 @@ class OpenClExecutor final : public RayExecutor {
   std::unique_ptr<RayExecutor> cpu_;
   uint64_t batches_ = 0;  // batches with rays
   uint64_t step_ = 0;     // begin_step calls
+  bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback
 };
 
 }  // namespace

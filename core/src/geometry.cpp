@@ -144,6 +144,13 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
   return *this;
 }
 
+void StepStats::reset() {
+  std::vector<DeviceWork> kept = std::move(devices);
+  kept.clear();
+  *this = {};
+  devices = std::move(kept);
+}
+
 const char* line_status_name(int status) {
   static const char* names[RTCD_LINE_STATUS_COUNT] = {"hit",  "behind",     "front",   "boundary",
                                                       "miss", "step_limit", "parallel"};

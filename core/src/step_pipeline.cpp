@@ -213,7 +213,7 @@ void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& ou
     return seconds;
   };
   validate(pairs);  // before anything changes: bad input loses no state
-  out.stats = {};
+  out.stats.reset();
   prepare(pairs, out);
   out.stats.seconds_prepare = lap();
   executor_->begin_step();
@@ -225,6 +225,7 @@ void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& ou
     out.stats.bytes_from_device += moved.from_device;
     (list == 1 ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
   }
+  executor_->account(out.stats);
   gather(pairs, out);
   out.stats.seconds_gather = lap();
 }

@@ -68,6 +68,9 @@ class OursRunner final : public Runner {
     out.rays = s.rays_full + s.rays_predictive + s.rays_iterative;
     out.bytes_to_device = s.bytes_to_device;
     out.bytes_from_device = s.bytes_from_device;
+    out.device_rays.clear();
+    for (const DeviceWork& d : s.devices) out.device_rays.push_back(d.rays);
+    out.cpu_fallback = s.cpu_fallback;
     out.contacts = result_.contacts.size();
     for (const PairResult& p : result_.pairs) out.colliding += p.colliding;
     for (const Contact& c : result_.contacts) out.depth_sum += c.depth;

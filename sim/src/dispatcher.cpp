@@ -207,16 +207,8 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
 
   const BodyLink& la = slot_of(a)->link;
   const BodyLink& lb = slot_of(b)->link;
-  btScalar friction = 0, restitution = 0;
-  if (count > 0 && options_.friction) {
-    friction = btScalar(la.friction * lb.friction);
-    batch_.friction = true;
-  }
-  if (!chosen_touching_.empty() && options_.restitution) {
-    restitution = btScalar(la.restitution * lb.restitution);
-    batch_.restitution = true;
-  }
-  batch_.speculative = batch_.speculative || !chosen_gaps_.empty();
+  const btScalar friction = options_.friction ? btScalar(la.friction * lb.friction) : btScalar(0);
+  const btScalar restitution = options_.restitution ? btScalar(la.restitution * lb.restitution) : btScalar(0);
   size_t written = 0;
   const auto write = [&](const Candidate& c) {
     const btVector3 pa = bt(c.on_a), pb = bt(c.on_b);
@@ -227,6 +219,9 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
     pt.m_combinedFriction = friction;
     // A speculative point has not touched: it must not bounce.
     pt.m_combinedRestitution = c.distance < 0 ? restitution : btScalar(0);
+    batch_.friction_points += pt.m_combinedFriction > 0;
+    batch_.restitution_points += pt.m_combinedRestitution > 0;
+    batch_.speculative_points += c.distance > 0;
     pt.m_partId0 = c.side;
     pt.m_index0 = int(c.vertex);
     for (const btManifoldPoint& old : previous_) {
@@ -245,7 +240,6 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
   for (size_t i : chosen_touching_) write(touching_[i]);
   for (size_t i : chosen_gaps_) write(gaps_[i]);
   batch_.points += written;
-  batch_.speculative_points += chosen_gaps_.size();
 }
 
 void BatchDispatcher::release(PairManifolds& held) {

@@ -29,6 +29,31 @@ class NoContacts final : public btCollisionDispatcher {
   void dispatchAllCollisionPairs(btOverlappingPairCache*, const btDispatcherInfo&, btDispatcher*) override {}
 };
 
+// Bullet's own narrow phase (kGimpact), counted as BatchDispatcher counts
+// rtcd's: the batches, and the points Bullet wrote with friction and with
+// restitution (it combines them from the bodies' coefficients).
+class GimpactDispatcher final : public btCollisionDispatcher {
+ public:
+  using btCollisionDispatcher::btCollisionDispatcher;
+  uint64_t batches = 0;
+  size_t friction_points = 0, restitution_points = 0;  // the last batch's
+
+  void dispatchAllCollisionPairs(btOverlappingPairCache* pairs, const btDispatcherInfo& info,
+                                 btDispatcher* dispatcher) override {
+    btCollisionDispatcher::dispatchAllCollisionPairs(pairs, info, dispatcher);
+    ++batches;
+    friction_points = restitution_points = 0;
+    for (int i = 0; i < getNumManifolds(); ++i) {
+      const btPersistentManifold* m = getManifoldByIndexInternal(i);
+      for (int k = 0; k < m->getNumContacts(); ++k) {
+        const btManifoldPoint& p = m->getContactPoint(k);
+        friction_points += p.m_combinedFriction > 0;
+        restitution_points += p.m_combinedRestitution > 0 && p.getDistance() < 0;
+      }
+    }
+  }
+};
+
 // Bullet's world with its collision and solver phases timed apart.
 class TimedWorld final : public btDiscreteDynamicsWorld {
  public:
@@ -160,8 +185,8 @@ struct Simulation::Impl {
   std::unique_ptr<NarrowPhase> probe;   // the interpenetration pass's: stateless, full tracing
   std::unique_ptr<btDefaultCollisionConfiguration> configuration;
   std::unique_ptr<btCollisionDispatcher> dispatcher;
-  BatchDispatcher* batch = nullptr;  // dispatcher, when rtcd answers the contacts
-  bool gimpact = false;              // Bullet's GIMPACT answers them
+  BatchDispatcher* batch = nullptr;        // dispatcher, when rtcd answers the contacts
+  GimpactDispatcher* gimpact = nullptr;    // dispatcher, when Bullet's GIMPACT answers them
   std::unique_ptr<btDbvtBroadphase> broadphase;
   std::unique_ptr<btSequentialImpulseConstraintSolver> solver;
   std::unique_ptr<TimedWorld> world;
@@ -184,29 +209,35 @@ struct Simulation::Impl {
   void spawn_initial();
   void emit(double time);
   BodyId register_shape_body(ShapeId id, ShapeId probe_id, const Pose& pose);
+  // A body's coefficients as Bullet holds them: GIMPACT combines them into
+  // its points, so an effect that is not listed must leave them at zero.
+  btScalar bullet_friction(double f) const { return scene.has(Effect::friction) ? btScalar(f) : btScalar(0); }
+  btScalar bullet_restitution(double e) const { return scene.has(Effect::restitution) ? btScalar(e) : btScalar(0); }
   void measure();
 };
 
 Simulation::Impl::Impl(const Scene& s, const std::string& backend_override) : scene(s), rng(s.seed) {
   backend_name = backend_override.empty() ? scene.backend : backend_override;
   const bool contacts = scene.has(Effect::contacts);
-  gimpact = contacts && backend_name == kGimpact;
-  if (contacts && !gimpact) narrow = make_narrow_phase(backend_name, scene.narrow);
+  const bool use_gimpact = contacts && backend_name == kGimpact;
+  if (contacts && !use_gimpact) narrow = make_narrow_phase(backend_name, scene.narrow);
   if (scene.has(Effect::interpenetration)) {
     Config c = scene.narrow;
     c.mode = Mode::full;
     c.predictive = false;
     probe = make_narrow_phase(backend_name == kGimpact ? "auto" : backend_name, c);
   }
-  if (gimpact) backend_name = kGimpact;
+  if (use_gimpact) backend_name = kGimpact;
   else if (narrow) backend_name = narrow->name();
   else if (probe) backend_name = probe->name();
   else backend_name = "none";
 
   configuration = std::make_unique<btDefaultCollisionConfiguration>();
-  if (gimpact) {
-    dispatcher = std::make_unique<btCollisionDispatcher>(configuration.get());
-    btGImpactCollisionAlgorithm::registerAlgorithm(dispatcher.get());
+  if (use_gimpact) {
+    auto d = std::make_unique<GimpactDispatcher>(configuration.get());
+    btGImpactCollisionAlgorithm::registerAlgorithm(d.get());
+    gimpact = d.get();
+    dispatcher = std::move(d);
   } else if (contacts) {
     DispatcherOptions options;
     options.points_per_pair = scene.points_per_pair;
@@ -302,6 +333,8 @@ void Simulation::Impl::add_ground() {
   ground_plane = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), btScalar(0));
   btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, ground_plane.get());
   info.m_startWorldTransform = bt(pose);
+  info.m_friction = bullet_friction(g.friction);
+  info.m_restitution = bullet_restitution(g.restitution);
   Body b;
   b.rigid = std::make_unique<btRigidBody>(info);
   b.id = register_shape_body(id, probe_id, pose);
@@ -321,8 +354,8 @@ void Simulation::Impl::add_body(size_t spec_index, const Pose& shape_pose, const
   btRigidBody::btRigidBodyConstructionInfo info(btScalar(mass), nullptr, k.collision_shape(),
                                                 spec.is_static ? btVector3(0, 0, 0) : bt(k.mass.principal_moments));
   info.m_startWorldTransform = bt(shape_pose * k.principal);
-  info.m_friction = btScalar(spec.friction);
-  info.m_restitution = btScalar(spec.restitution);
+  info.m_friction = bullet_friction(spec.friction);
+  info.m_restitution = bullet_restitution(spec.restitution);
   Body b;
   b.rigid = std::make_unique<btRigidBody>(info);
   b.id = register_shape_body(k.id, k.probe_id, shape_pose);
@@ -399,7 +432,7 @@ void Simulation::Impl::measure() {
   record.interpenetration = sum;
   record.deepest = deepest;
   record.interpenetration_pairs = pairs.size();
-  ++counters.interpenetration;
+  ++counters.interpenetration_passes;
 }
 
 Simulation::Simulation(const Scene& scene, const std::string& backend) : impl_(std::make_unique<Impl>(scene, backend)) {}
@@ -420,9 +453,11 @@ const StepRecord& Simulation::step() {
   m.emit(double(index) * m.scene.time_step);
   if (m.scene.has(Effect::gravity)) {
     const btVector3 g = bt(m.scene.gravity);
-    for (Body& b : m.bodies)
-      if (!b.rigid->isStaticObject()) b.rigid->applyCentralForce(g / b.rigid->getInvMass());
-    ++m.counters.gravity;
+    for (Body& b : m.bodies) {
+      if (b.rigid->isStaticObject()) continue;
+      b.rigid->applyCentralForce(g / b.rigid->getInvMass());
+      ++m.counters.gravity_forces;
+    }
   }
   effects += seconds_since(t);
 
@@ -444,18 +479,21 @@ const StepRecord& Simulation::step() {
   r.seconds_narrow = m.world->narrow;
   r.seconds_solver = m.world->solver;
   if (m.batch) {
-    ++m.counters.narrow_phase;
     const auto& batch = m.batch->last_batch();
     const StepResult& n = m.batch->last_step();
-    m.counters.friction += batch.friction;
-    m.counters.restitution += batch.restitution;
-    m.counters.speculative += batch.speculative;
+    m.counters.narrow_phase_batches = batch.calls;
+    m.counters.friction_points += batch.friction_points;
+    m.counters.restitution_points += batch.restitution_points;
+    m.counters.speculative_points += batch.speculative_points;
     r.pairs = batch.pairs;
     r.pairs_full = n.stats.pairs_full;
     r.pairs_iterative = n.stats.pairs_iterative;
     r.rays_full = n.stats.rays_full;
     r.rays_predictive = n.stats.rays_predictive;
     r.rays_iterative = n.stats.rays_iterative;
+    r.device_rays.clear();
+    for (const DeviceWork& d : n.stats.devices) r.device_rays.push_back(d.rays);
+    r.cpu_fallback = n.stats.cpu_fallback;
     r.contacts = n.contacts.size();
     r.predictive = n.predictive.size();
     r.solver_points = batch.points;
@@ -463,7 +501,9 @@ const StepRecord& Simulation::step() {
     const BodyId ground = m.scene.ground.present ? 0 : UINT32_MAX;  // the ground is made first
     for (const Contact& c : n.contacts) r.ground_contacts += c.source_body == ground || c.target_body == ground;
   } else if (m.gimpact) {
-    ++m.counters.narrow_phase;
+    m.counters.narrow_phase_batches = m.gimpact->batches;
+    m.counters.friction_points += m.gimpact->friction_points;
+    m.counters.restitution_points += m.gimpact->restitution_points;
     r.pairs = size_t(m.world->getBroadphase()->getOverlappingPairCache()->getNumOverlappingPairs());
     btDispatcher* d = m.dispatcher.get();
     const btCollisionObject* ground = m.scene.ground.present ? m.bodies[0].rigid.get() : nullptr;

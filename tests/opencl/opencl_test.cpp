@@ -17,6 +17,7 @@
 #include "rtcd/error.hpp"
 #include "rtcd/validation/differential.hpp"
 #include "rtcd/validation/families.hpp"
+#include "same_steps.hpp"
 #include "support.hpp"
 
 namespace rtcd::test {
@@ -24,97 +25,27 @@ namespace {
 
 using validation::Family;
 
-// Pairs of a family stepped together, B moving a little each step: every
-// step is one batch of many jobs, spread over the devices.
-struct Scene {
-  std::string family;
-  Mode mode;
-  size_t pairs = 16;
-  size_t steps = 4;
-  uint64_t seed = 7;
-};
-
-std::vector<StepResult> run_scene(const std::string& backend, const Scene& s) {
-  const Family f = validation::make_family(s.family);
-  Config config;
-  config.mode = s.mode;
-  auto narrow = make_narrow_phase(backend, config);
-  const ShapeId sa = narrow->add_shape(f.a), sb = narrow->add_shape(f.b);
-  std::vector<BodyPair> pairs;
-  std::vector<validation::PosePair> poses;
-  for (size_t i = 0; i < s.pairs; ++i) {
-    poses.push_back(validation::random_poses(f, s.seed, i));
-    pairs.push_back({narrow->add_body(sa, poses[i].a), narrow->add_body(sb, poses[i].b)});
-  }
-  std::vector<StepResult> results;
-  for (size_t step = 0; step < s.steps; ++step) {
-    for (size_t i = 0; i < s.pairs; ++i) {
-      if (step > 0) poses[i] = validation::moved(f, poses[i], f.step_motion(), s.seed, step * s.pairs + i);
-      narrow->set_pose(pairs[i].a, poses[i].a);
-      narrow->set_pose(pairs[i].b, poses[i].b);
+// The device did the work, not the CPU fallback (whose answers are the same
+// by design, so equal output alone cannot tell): no step fell back, every
+// candidate ray ran on a device, and each of the `devices` ran some.
+void expect_ran_on_devices(const std::vector<StepResult>& run, size_t devices) {
+  std::vector<size_t> rays(devices, 0);
+  for (size_t s = 0; s < run.size(); ++s) {
+    const StepStats& stats = run[s].stats;
+    EXPECT_EQ(stats.cpu_fallback, "") << "step " << s;
+    ASSERT_EQ(stats.devices.size(), devices) << "step " << s;
+    size_t sum = 0;
+    for (size_t d = 0; d < devices; ++d) {
+      rays[d] += stats.devices[d].rays;
+      sum += stats.devices[d].rays;
     }
-    results.push_back(narrow->detect(pairs));
+    EXPECT_EQ(sum, stats.candidates) << "step " << s << ": rays the devices did not run";
+    EXPECT_GT(stats.bytes_from_device, 0u) << "step " << s;
   }
-  return results;
-}
-
-void expect_same_record(const RayRecord& x, const RayRecord& y) {
-  EXPECT_EQ(x.source, y.source);
-  EXPECT_EQ(x.source_body, y.source_body);
-  EXPECT_EQ(x.target_body, y.target_body);
-  EXPECT_EQ(x.vertex, y.vertex);
-  EXPECT_EQ(x.triangle, y.triangle) << "vertex " << x.vertex;
-  EXPECT_EQ(x.origin, y.origin);
-  EXPECT_EQ(x.direction, y.direction);
-  EXPECT_EQ(x.normal, y.normal);
-}
-
-// Everything a step reports, bit for bit, but the clock readings.
-void expect_same_step(const StepResult& x, const StepResult& y, const std::string& where) {
-  SCOPED_TRACE(where);
-  ASSERT_EQ(x.pairs.size(), y.pairs.size());
-  for (size_t i = 0; i < x.pairs.size(); ++i) {
-    EXPECT_EQ(x.pairs[i].colliding, y.pairs[i].colliding) << "pair " << i;
-    EXPECT_EQ(x.pairs[i].mode, y.pairs[i].mode) << "pair " << i;
-    EXPECT_EQ(x.pairs[i].max_depth, y.pairs[i].max_depth) << "pair " << i;
-    EXPECT_EQ(x.pairs[i].contact_count, y.pairs[i].contact_count) << "pair " << i;
-    EXPECT_EQ(x.pairs[i].predictive_count, y.pairs[i].predictive_count) << "pair " << i;
-  }
-  ASSERT_EQ(x.contacts.size(), y.contacts.size());
-  for (size_t k = 0; k < x.contacts.size(); ++k) {
-    expect_same_record(x.contacts[k], y.contacts[k]);
-    EXPECT_EQ(x.contacts[k].depth, y.contacts[k].depth);
-    EXPECT_EQ(x.contacts[k].projected_depth, y.contacts[k].projected_depth);
-    EXPECT_EQ(x.contacts[k].push, y.contacts[k].push);
-  }
-  ASSERT_EQ(x.predictive.size(), y.predictive.size());
-  for (size_t k = 0; k < x.predictive.size(); ++k) {
-    expect_same_record(x.predictive[k], y.predictive[k]);
-    EXPECT_EQ(x.predictive[k].distance, y.predictive[k].distance);
-  }
-  const StepStats &a = x.stats, &b = y.stats;
-  EXPECT_EQ(a.pairs_full, b.pairs_full);
-  EXPECT_EQ(a.pairs_iterative, b.pairs_iterative);
-  EXPECT_EQ(a.fallbacks_to_full, b.fallbacks_to_full);
-  EXPECT_EQ(a.candidates, b.candidates);
-  EXPECT_EQ(a.rays_full, b.rays_full);
-  EXPECT_EQ(a.rays_predictive, b.rays_predictive);
-  EXPECT_EQ(a.rays_iterative, b.rays_iterative);
-  EXPECT_EQ(a.walk_steps, b.walk_steps);
-  EXPECT_EQ(a.nearest_queries, b.nearest_queries);
-  EXPECT_EQ(a.rays_retraced, b.rays_retraced);
-  EXPECT_EQ(a.rays_watched, b.rays_watched);
-  EXPECT_EQ(a.walk_endings, b.walk_endings);
-}
-
-size_t expect_same_run(const std::vector<StepResult>& x, const std::vector<StepResult>& y) {
-  EXPECT_EQ(x.size(), y.size());
-  size_t reported = 0;
-  for (size_t s = 0; s < std::min(x.size(), y.size()); ++s) {
-    expect_same_step(x[s], y[s], "step " + std::to_string(s));
-    reported += y[s].contacts.size() + y[s].predictive.size();
-  }
-  return reported;
+  for (size_t d = 0; d < devices; ++d) EXPECT_GT(rays[d], 0u) << "device " << d << " ran no ray";
+  // The first step has no pair state: its jobs are spread over every device.
+  if (!run.empty())
+    for (size_t d = 0; d < devices; ++d) EXPECT_GT(run[0].stats.devices[d].jobs, 0u) << "device " << d;
 }
 
 std::string mode_name(Mode m) { return m == Mode::automatic ? "auto" : to_string(m); }
@@ -156,7 +87,9 @@ class BasicVariant : public ::testing::TestWithParam<std::tuple<std::string, Mod
 TEST_P(BasicVariant, EqualsBasicBitForBit) {
   const auto& [family, mode] = GetParam();
   const Scene scene{family, mode};
-  const size_t reported = expect_same_run(run_scene("opencl-basic", scene), run_scene("basic", scene));
+  const auto device = run_scene("opencl-basic", scene);
+  expect_ran_on_devices(device, 2);
+  const size_t reported = expect_same_run(device, run_scene("basic", scene));
   EXPECT_GT(reported, 0u) << "nothing reported: the comparison would be vacuous";
 }
 
@@ -167,7 +100,9 @@ class BvhVariant : public ::testing::TestWithParam<std::tuple<std::string, Mode>
 TEST_P(BvhVariant, EqualsBasicBitForBit) {
   const auto& [family, mode] = GetParam();
   const Scene scene{family, mode};
-  const size_t reported = expect_same_run(run_scene("opencl", scene), run_scene("basic", scene));
+  const auto device = run_scene("opencl", scene);
+  expect_ran_on_devices(device, 2);
+  const size_t reported = expect_same_run(device, run_scene("basic", scene));
   EXPECT_GT(reported, 0u);
 }
 
@@ -240,7 +175,10 @@ TEST(OpenCl, BvhMissesNothingInFullMode) {
 TEST(OpenCl, TwoDevicesEqualOne) {
   for (Mode mode : {Mode::full, Mode::automatic}) {
     const Scene scene{"concave", mode, 24, 4};
-    const size_t reported = expect_same_run(run_scene("opencl", scene), run_scene("opencl:devices=1", scene));
+    const auto two = run_scene("opencl", scene), one = run_scene("opencl:devices=1", scene);
+    expect_ran_on_devices(two, 2);
+    expect_ran_on_devices(one, 1);
+    const size_t reported = expect_same_run(two, one);
     EXPECT_GT(reported, 0u);
   }
 }
@@ -269,12 +207,18 @@ TEST(OpenCl, LayoutsAgree) {
   for (Mode mode : {Mode::full, Mode::automatic}) {
     const Scene scene{"concave", mode, 24, 4};
     const auto by_mode = run_scene("opencl", scene);
-    EXPECT_GT(expect_same_run(run_scene("opencl:layout=grid", scene), by_mode), 0u);
-    EXPECT_GT(expect_same_run(run_scene("opencl:layout=compact", scene), by_mode), 0u);
+    expect_ran_on_devices(by_mode, 2);
+    for (const std::string layout : {"grid", "compact"}) {
+      const auto laid_out = run_scene("opencl:layout=" + layout, scene);
+      expect_ran_on_devices(laid_out, 2);
+      EXPECT_GT(expect_same_run(laid_out, by_mode), 0u) << layout;
+    }
   }
   for (Mode mode : {Mode::full, Mode::iterative}) {
     const Scene scene{"primitives", mode, 24, 4};
-    EXPECT_GT(expect_same_run(run_scene("opencl-basic:layout=grid:devices=0", scene), run_scene("basic", scene)), 0u);
+    const auto grid = run_scene("opencl-basic:layout=grid:devices=0", scene);
+    expect_ran_on_devices(grid, 1);
+    EXPECT_GT(expect_same_run(grid, run_scene("basic", scene)), 0u);
   }
 }
 
@@ -286,6 +230,7 @@ TEST(OpenCl, HostPlacementEqualsDevicePlacement) {
   const Scene scene{"concave", Mode::automatic};
   const auto placed_by_host = run_scene("opencl-basic", scene);
   ASSERT_EQ(unsetenv("RTCD_OPENCL_NO_FP64"), 0);
+  expect_ran_on_devices(placed_by_host, 2);
   ASSERT_FALSE(narrow->devices().empty());
   EXPECT_NE(narrow->devices()[0].find("placed in double on the host"), std::string::npos) << narrow->devices()[0];
   EXPECT_GT(expect_same_run(placed_by_host, run_scene("basic", scene)), 0u);
@@ -313,6 +258,15 @@ TEST_P(Faults, FinishOnTheCpuWithTheSameOutput) {
   EXPECT_EQ(err.find("rtcd: ", first + 1), std::string::npos) << "one message, on the first occurrence:\n" << err;
   EXPECT_NE(err.find(reason), std::string::npos) << err;
   EXPECT_NE(err.find("on the CPU (basic)"), std::string::npos) << err;
+  // The statistics say so too, from the failing step on: a setup fault from
+  // the first step, the mid-step one after the devices ran the first step.
+  size_t first_on_cpu = 0;
+  while (first_on_cpu < faulted.size() && faulted[first_on_cpu].stats.cpu_fallback.empty()) ++first_on_cpu;
+  EXPECT_EQ(first_on_cpu, fault == OpenClFault::mid_step ? 1u : 0u);
+  for (size_t s = first_on_cpu; s < faulted.size(); ++s)
+    EXPECT_NE(faulted[s].stats.cpu_fallback.find(reason), std::string::npos)
+        << "step " << s << ": '" << faulted[s].stats.cpu_fallback << "'";
+  if (fault == OpenClFault::mid_step) expect_ran_on_devices({faulted.front()}, 2);
   EXPECT_GT(expect_same_run(faulted, reference), 0u);
 }
 

@@ -1,6 +1,8 @@
-// The simulation host on small scenes that finish in seconds: resting,
-// bouncing, stacking, sliding with and without friction, effects that are not
-// listed, speculative contacts without ghosts, bad scenes, reproducibility.
+// The simulation host on small scenes that finish in seconds: each effect
+// checked by what it does to the bodies with it listed and without (gravity,
+// contacts, friction, restitution, predictive, speculative, projected,
+// interpenetration), resting, stacking, the stages' work counters, bad
+// scenes, reproducibility.
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -37,29 +39,39 @@ TEST(Sim, BoxRestsOnTheGround) {
 }
 
 // A sphere of radius 0.5 dropped from 1 m (lowest point) with restitution
-// e = 0.8 bounces to e² h. At 1 kHz the impact speed of 4.4 m/s moves 4.4 mm
-// a step; predictive rays find the impact on the step it happens, so it is
-// never deeper than that step's motion (under 1% of the radius: 5 mm).
-TEST(Sim, SphereBouncesToRestitutionSquaredTimesHeight) {
+// e = 0.8 bounces to e² h; without the effect it does not bounce. At 1 kHz
+// the impact speed of 4.4 m/s moves 4.4 mm a step; predictive rays find the
+// impact on the step it happens, so it is never deeper than that step's
+// motion (under 1% of the radius: 5 mm).
+TEST(Sim, SphereBouncesToRestitutionSquaredTimesHeightOnlyWithRestitution) {
   const double e = 0.8, h = 1.0, r = 0.5;
-  Simulation s(scene_from(R"({
-    "time_step": 0.001, "steps": 2000,
-    "effects": ["gravity", "contacts", "restitution", "predictive", "projected"],
-    "ground": {"restitution": 1.0},
-    "bodies": [{"sphere": 0.5, "mass": 1, "restitution": 0.8, "pose": {"position": [0, 0, 1.5]}}]
-  })"));
-  bool bounced = false;
-  double peak = 0, deepest = 0;
-  for (int i = 0; i < 2000; ++i) {
-    s.step();
-    const auto b = s.bodies()[0];
-    deepest = std::max(deepest, r - b.pose.position.z());
-    if (b.linear_velocity.z() > 0) bounced = true;
-    if (bounced) peak = std::max(peak, b.pose.position.z() - r);
+  for (bool restitution : {true, false}) {
+    const std::string effects = restitution ? R"(["gravity", "contacts", "restitution", "predictive", "projected"])"
+                                            : R"(["gravity", "contacts", "predictive", "projected"])";
+    Simulation s(scene_from(R"({
+      "time_step": 0.001, "steps": 2000, "effects": )" + effects + R"(,
+      "ground": {"restitution": 1.0},
+      "bodies": [{"sphere": 0.5, "mass": 1, "restitution": 0.8, "pose": {"position": [0, 0, 1.5]}}]
+    })"));
+    bool bounced = false;
+    double peak = 0, deepest = 0;
+    for (int i = 0; i < 2000; ++i) {
+      s.step();
+      const auto b = s.bodies()[0];
+      deepest = std::max(deepest, r - b.pose.position.z());
+      if (b.linear_velocity.z() > 0) bounced = true;
+      if (bounced) peak = std::max(peak, b.pose.position.z() - r);
+    }
+    EXPECT_LT(deepest, 0.01 * r);
+    if (restitution) {
+      ASSERT_TRUE(bounced);
+      EXPECT_NEAR(peak, e * e * h, 0.1 * e * e * h);
+      EXPECT_GT(s.counters().restitution_points, 0u);
+    } else {
+      EXPECT_LT(peak, 0.01 * h) << "rose again without restitution";
+      EXPECT_EQ(s.counters().restitution_points, 0u);
+    }
   }
-  ASSERT_TRUE(bounced);
-  EXPECT_LT(deepest, 0.01 * r);
-  EXPECT_NEAR(peak, e * e * h, 0.1 * e * e * h);
 }
 
 // A concave U dropped onto another resting on the ground: both end at rest,
@@ -151,45 +163,141 @@ TEST(Sim, FrictionOnASlopeFollowsCoulomb) {
     const double slid = (s.bodies()[0].pose.position - start).norm();
     const double expected = 0.5 * kG * (std::sin(theta) - (friction ? mu * std::cos(theta) : 0.0)) * t * t;
     EXPECT_NEAR(slid, expected, 0.1 * expected) << (friction ? "with" : "without") << " friction";
+    if (friction)
+      EXPECT_GT(s.counters().friction_points, 0u);
+    else
+      EXPECT_EQ(s.counters().friction_points, 0u);
   }
 }
 
-// A stage whose effect is not listed never runs; a listed one runs (friction,
-// restitution and speculative on the steps that have points for them).
-TEST(Sim, EffectsNotListedNeverRun) {
-  const std::string bodies = R"("bodies": [{"box": [0.25, 0.25, 0.25], "pose": {"position": [0, 0, 0.3]}}])";
+// Gravity is the scene's vector, applied to every dynamic body and to no
+// static one: free fall under Bullet's semi-implicit Euler, v_n = g n dt and
+// x_n = x_0 + g dt² n(n+1)/2. Unlisted, nothing moves.
+TEST(Sim, GravityAcceleratesDynamicBodiesByTheScenesVector) {
+  const Eigen::Vector3d g(0.5, -1.0, -3.0);
+  const double dt = 0.01;
+  const int n = 60;
+  for (bool gravity : {true, false}) {
+    Simulation s(scene_from(std::string(R"({"time_step": 0.01, "steps": 60, "ground": false, "gravity": [0.5, -1, -3],
+      "effects": )") + (gravity ? R"(["gravity"])" : "[]") + R"(,
+      "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 2, "pose": {"position": [0, 0, 1]}},
+                 {"box": [0.25, 0.25, 0.25], "static": true, "pose": {"position": [3, 0, 0]}}]})"));
+    for (int i = 0; i < n; ++i) s.step();
+    const auto bodies = s.bodies();
+    const Eigen::Vector3d v = gravity ? Eigen::Vector3d(g * n * dt) : Eigen::Vector3d::Zero();
+    const Eigen::Vector3d x = Eigen::Vector3d(0, 0, 1) + (gravity ? Eigen::Vector3d(g * dt * dt * n * (n + 1) / 2) : Eigen::Vector3d::Zero());
+    EXPECT_LT((bodies[0].linear_velocity - v).norm(), 1e-5) << bodies[0].linear_velocity.transpose();
+    EXPECT_LT((bodies[0].pose.position - x).norm(), 1e-5) << bodies[0].pose.position.transpose();
+    EXPECT_EQ(bodies[1].pose.position, Eigen::Vector3d(3, 0, 0)) << "a static body does not fall";
+    EXPECT_EQ(s.counters().gravity_forces, gravity ? uint64_t(n) : 0u) << "once per dynamic body and step";
+  }
+}
+
+// The counters count each stage's work where it is done, so an unlisted
+// effect is seen doing nothing where it would have work: a box landing on
+// the ground with friction and restitution coefficients and predictive rays
+// to make speculative points from. The box starts 0.05 above the ground, its
+// corner rays 0.087 from it: an extension of 0.1 tracks them from the first
+// step (a derived one, a tenth of the box's radius, would first see them
+// once they touch).
+TEST(Sim, StagesCountTheirWorkAndUnlistedOnesDoNone) {
+  const std::string rest = R"("interpenetration": {"every": 5}, "ground": {"restitution": 1.0},
+    "narrow_phase": {"distance_extension": 0.1, "displacement_threshold": 0.05},
+    "bodies": [{"box": [0.25, 0.25, 0.25], "friction": 0.5, "restitution": 0.5, "pose": {"position": [0, 0, 0.3]}}]})";
   {
-    Simulation s(scene_from(R"({"steps": 20, "effects": ["gravity"], )" + bodies + "}"));
+    Simulation s(scene_from(R"({"steps": 20, "effects": ["gravity"], )" + rest));
     for (int i = 0; i < 20; ++i) s.step();
     const sim::StageCounters& c = s.counters();
-    EXPECT_EQ(c.gravity, 20u);
-    EXPECT_EQ(c.narrow_phase, 0u);
-    EXPECT_EQ(c.friction + c.restitution + c.speculative + c.interpenetration + c.snapshots, 0u);
+    EXPECT_EQ(c.gravity_forces, 20u);
+    EXPECT_EQ(c.narrow_phase_batches, 0u);
+    EXPECT_EQ(c.friction_points + c.restitution_points + c.speculative_points + c.interpenetration_passes + c.snapshots, 0u);
     EXPECT_EQ(s.backend(), "none") << "no narrow phase is even made";
     EXPECT_LT(s.bodies()[0].pose.position.z(), 0.0) << "without contacts it falls through the ground";
   }
   {
-    Simulation s(scene_from(R"({"steps": 20, "effects": ["contacts"], )" + bodies + "}"));
+    Simulation s(scene_from(R"({"steps": 20, "effects": ["contacts"], )" + rest));
     for (int i = 0; i < 20; ++i) s.step();
-    EXPECT_EQ(s.counters().gravity, 0u);
-    EXPECT_EQ(s.counters().narrow_phase, 20u);
+    EXPECT_EQ(s.counters().gravity_forces, 0u);
+    EXPECT_EQ(s.counters().narrow_phase_batches, 20u);
     EXPECT_NEAR(s.bodies()[0].pose.position.z(), 0.3, 1e-6) << "without gravity it stays put";
   }
-  {
-    // The box starts 0.05 above the ground, its corner rays 0.087 from it:
-    // an extension of 0.1 tracks them from the first step (a derived one,
-    // a tenth of the box's radius, would first see them once they touch).
-    Simulation s(scene_from(R"({"steps": 20, "effects": ["gravity", "contacts", "friction", "restitution",
-        "predictive", "speculative", "projected", "interpenetration"], "interpenetration": {"every": 5},
-        "narrow_phase": {"distance_extension": 0.1, "displacement_threshold": 0.05}, )" + bodies + "}"));
-    for (int i = 0; i < 20; ++i) s.step();
+  for (bool listed : {false, true}) {
+    const std::string effects = listed ? R"(["gravity", "contacts", "friction", "restitution", "predictive", "speculative",
+                                             "projected", "interpenetration"])"
+                                       : R"(["gravity", "contacts", "predictive", "projected"])";
+    Simulation s(scene_from(R"({"steps": 20, "effects": )" + effects + ", " + rest));
+    size_t points = 0, touching = 0, speculative = 0, predictive = 0;
+    for (int i = 0; i < 20; ++i) {
+      const sim::StepRecord& r = s.step();
+      points += r.solver_points;
+      touching += r.solver_points - r.speculative_points;
+      speculative += r.speculative_points;
+      predictive += r.predictive;
+    }
     const sim::StageCounters& c = s.counters();
-    EXPECT_EQ(c.gravity, 20u);
-    EXPECT_EQ(c.narrow_phase, 20u);
-    EXPECT_GT(c.friction, 0u);
-    EXPECT_GT(c.restitution, 0u);
-    EXPECT_GT(c.speculative, 0u);
-    EXPECT_EQ(c.interpenetration, 4u);
+    EXPECT_EQ(c.gravity_forces, 20u);
+    EXPECT_EQ(c.narrow_phase_batches, 20u);
+    ASSERT_GT(touching, 0u) << "the box lands";
+    ASSERT_GT(predictive, 0u) << "rays a speculative stage could use";
+    if (listed) {
+      EXPECT_EQ(c.friction_points, points) << "every point carries friction";
+      EXPECT_EQ(c.restitution_points, touching) << "every touching point, and no speculative one, carries restitution";
+      EXPECT_EQ(c.speculative_points, speculative);
+      EXPECT_GT(c.speculative_points, 0u);
+      EXPECT_EQ(c.interpenetration_passes, 4u);
+    } else {
+      EXPECT_EQ(speculative, 0u);
+      EXPECT_EQ(c.friction_points + c.restitution_points + c.speculative_points + c.interpenetration_passes, 0u);
+    }
+  }
+}
+
+// Projected contacts push along the impacted triangle's normal: on a
+// frictionless ground no other direction, so a tilted box landing on an
+// edge keeps its centre of mass from moving sideways. Pushed along the
+// rays instead (a box's corner rays point inward, diagonally), the landing
+// kicks it sideways.
+TEST(Sim, ProjectedContactsPushAlongTheNormalOnly) {
+  for (bool projected : {true, false}) {
+    const std::string effects = projected ? R"(["gravity", "contacts", "predictive", "projected"])"
+                                          : R"(["gravity", "contacts", "predictive"])";
+    // 30° about x: the lowest edge is 0.25 (cos 30° + sin 30°) = 0.342 below the centre.
+    Simulation s(scene_from(R"({"time_step": 0.008333333333333333, "steps": 120, "effects": )" + effects + R"(,
+      "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 1,
+                  "pose": {"position": [0, 0, 0.4], "orientation": [0.96592582628906831, 0.25881904510252074, 0, 0]}}]})"));
+    double sideways = 0;  // the largest horizontal speed seen
+    size_t contacts = 0;
+    for (int i = 0; i < 120; ++i) {
+      contacts += s.step().contacts;
+      const Eigen::Vector3d v = s.bodies()[0].linear_velocity;
+      sideways = std::max(sideways, std::hypot(v.x(), v.y()));
+    }
+    ASSERT_GT(contacts, 0u);
+    if (projected)
+      EXPECT_LT(sideways, 1e-6);
+    else
+      EXPECT_GT(sideways, 1e-2);
+  }
+}
+
+// The interpenetration pass measures what is there: a box held 0.05 deep in
+// the ground (no gravity, no contacts to push it out) has four corners sunk
+// 0.05, each reached by a diagonal ray 0.05 √3 long, on the pass's steps
+// (every 5th and the last) and on no other; unlisted, no step measures.
+TEST(Sim, InterpenetrationMeasuresTheDepthThere) {
+  for (bool listed : {true, false}) {
+    Simulation s(scene_from(std::string(R"({"steps": 12, "interpenetration": {"every": 5}, "effects": )") +
+                            (listed ? R"(["interpenetration"])" : "[]") + R"(,
+      "bodies": [{"box": [0.25, 0.25, 0.25], "pose": {"position": [0, 0, 0.2]}}]})"));
+    for (int i = 0; i < 12; ++i) {
+      const sim::StepRecord& r = s.step();
+      const bool due = listed && ((i + 1) % 5 == 0 || i == 11);
+      ASSERT_EQ(r.interpenetration >= 0, due) << "step " << i;
+      if (!due) continue;
+      EXPECT_NEAR(r.deepest, 0.05, 1e-5) << "step " << i;
+      EXPECT_NEAR(r.interpenetration, 4 * 0.05 * std::sqrt(3.0), 1e-4) << "step " << i;
+    }
+    EXPECT_EQ(s.counters().interpenetration_passes, listed ? 3u : 0u);
   }
 }
 
@@ -215,6 +323,7 @@ TEST(Sim, SpeculativeContactsMakeNoGhosts) {
     ASSERT_NEAR(b.linear_velocity.norm(), 1.5, 1e-4) << "step " << i;
   }
   EXPECT_GT(speculative, 0u);
+  EXPECT_EQ(s.counters().speculative_points, speculative);
 }
 
 // Speculative contacts do stop a body that approaches: a box falling fast
@@ -232,6 +341,10 @@ TEST(Sim, SpeculativeContactsCatchAnApproach) {
       s.step();
       depth[speculative] = std::max(depth[speculative], 0.25 - s.bodies()[0].pose.position.z());
     }
+    if (speculative)
+      EXPECT_GT(s.counters().speculative_points, 0u);
+    else
+      EXPECT_EQ(s.counters().speculative_points, 0u);
   }
   EXPECT_LT(depth[1], depth[0]);
   EXPECT_LT(depth[1], 0.01);

@@ -101,11 +101,14 @@ TEST(FoldGuard, FlatNeighboursAreNotInTheRing) {
   // segment into its inner side, so only the side faces' triangles remain.
   const rtcd::Mesh m = rtcd::gen::box({1.0, 1.0, 1.0});
   const rtcd::Mesh::FoldGuard& g = m.fold_guard();
-  for (uint32_t f = 0; f < m.triangle_count(); ++f)
+  for (uint32_t f = 0; f < m.triangle_count(); ++f) {
+    // Every triangle touches two or three side faces at its corners.
+    EXPECT_GE(g.ring_first[f + 1] - g.ring_first[f], 2u) << "triangle " << f << ": its side faces are not in its ring";
     for (uint32_t k = g.ring_first[f]; k < g.ring_first[f + 1]; ++k) {
       const int32_t other = g.ring[k];
       EXPECT_LT(m.triangle_normals()[f].dot(m.triangle_normals()[size_t(other)]), 0.5f) << f << " " << other;
     }
+  }
 }
 
 TEST(FoldGuard, SmallFacesFarApartNeedFewCells) {

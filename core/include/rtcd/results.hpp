@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -84,11 +85,28 @@ struct RayCounts {
   RayCounts& operator+=(const RayCounts& other);
 };
 
+// One device's share of a step's rays (OpenCL backends).
+struct DeviceWork {
+  size_t jobs = 0;  // pair-directions it ran, those with ray origins to try
+  size_t rays = 0;  // candidate rays it traced or walked
+};
+
 struct StepStats : RayCounts {
   size_t pairs_full = 0, pairs_iterative = 0;
   size_t fallbacks_to_full = 0;                               // pairs with state sent back to full by equation 2.1
   size_t bytes_to_device = 0, bytes_from_device = 0;          // host <-> device traffic (0 on the CPU)
+  // Where the rays ran: one entry per device of a device backend, in its
+  // order (empty on the CPU backends); rays the CPU ran in a device's stead
+  // are in no entry.
+  std::vector<DeviceWork> devices;
+  // Why this step's rays ran on the CPU instead of the backend's devices
+  // (from the failing batch on); empty when they did not.
+  std::string cpu_fallback;
   double seconds_prepare = 0, seconds_full = 0, seconds_iterative = 0, seconds_gather = 0;
+
+  // Zeroes every figure, keeping the buffer of `devices`: a steady step
+  // allocates nothing.
+  void reset();
 };
 
 struct StepResult {

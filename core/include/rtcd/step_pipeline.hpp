@@ -114,6 +114,10 @@ class RayExecutor {
   // least jobs.size(); the executor only clears and fills.
   virtual Transfers execute(std::span<const RayJob> jobs, const Config& config,
                             std::span<std::vector<RayOutcome>> outcomes, std::span<RayTally> tallies) = 0;
+  // After the step's batches: where its rays ran (StepStats::devices,
+  // ::cpu_fallback), so a host or a test can tell a device's work from a
+  // fallback's. The CPU executors have nothing to add.
+  virtual void account(StepStats& /*stats*/) const {}
 };
 
 std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,

@@ -50,6 +50,8 @@ struct ReplayStep {
   size_t fallbacks = 0;  // of pairs_full, those equation 2.1 sent back (the rest are new)
   double depth_sum = 0;  // summed depth of every contact as the engine reports it
   size_t bytes_to_device = 0, bytes_from_device = 0;  // ours on OpenCL: the step's host <-> device traffic
+  std::vector<size_t> device_rays;  // ours on OpenCL: the rays each device ran (StepStats::devices)
+  std::string cpu_fallback;         // ours on OpenCL: why the step ran on the CPU instead; empty: it did not
   // Judged steps (ours): ray origins the exact reference puts deeper than
   // epsilon inside the other body, and of those the ones with no contact;
   // contacts whose origin it puts farther than epsilon outside (false rays).

@@ -53,10 +53,11 @@ class BatchDispatcher : public btCollisionDispatcher {
   const std::vector<BodyPair>& last_pairs() const { return batch_pairs_; }
   struct Batch {
     uint64_t calls = 0;  // batches run so far
-    size_t pairs = 0, points = 0, speculative_points = 0, warm_started = 0;
-    // Which optional stages ran in this batch (their options are on and
-    // there were points to give them to).
-    bool friction = false, restitution = false, speculative = false;
+    size_t pairs = 0, points = 0, warm_started = 0;
+    // Counted as each point is written, so they say what the solver got:
+    // points with a friction coefficient, touching points with restitution,
+    // speculative points (a gap, from predictive rays).
+    size_t friction_points = 0, restitution_points = 0, speculative_points = 0;
     double seconds_narrow = 0, seconds_manifolds = 0;
   };
   const Batch& last_batch() const { return batch_; }

@@ -20,12 +20,18 @@ class SimulationError : public Error {
   using Error::Error;
 };
 
-// How often each stage ran: a stage whose effect is not listed stays at 0.
-// friction, restitution and speculative count the batches that gave them
-// points (a step without contacts has nothing to give friction to).
+// What each stage did, counted where it does it (not where the effect is
+// looked up): a stage whose effect is not listed stays at 0, and so does
+// one that had nothing to do (friction without contact points).
 struct StageCounters {
-  uint64_t steps = 0, gravity = 0, narrow_phase = 0, friction = 0, restitution = 0, speculative = 0,
-           interpenetration = 0, snapshots = 0;
+  uint64_t steps = 0;
+  uint64_t gravity_forces = 0;        // gravity applied to a dynamic body, once per body and step
+  uint64_t narrow_phase_batches = 0;  // collision batches a narrow phase answered (rtcd's or GIMPACT)
+  uint64_t friction_points = 0;       // points handed to the solver with a friction coefficient > 0
+  uint64_t restitution_points = 0;    // touching points handed to the solver with restitution > 0
+  uint64_t speculative_points = 0;    // points handed to the solver with a gap (from predictive rays)
+  uint64_t interpenetration_passes = 0;
+  uint64_t snapshots = 0;
 };
 
 // What one step did and cost.
@@ -38,6 +44,8 @@ struct StepRecord {
   size_t rays_full = 0, rays_predictive = 0, rays_iterative = 0;
   size_t contacts = 0, predictive = 0, solver_points = 0, speculative_points = 0;
   size_t ground_contacts = 0;  // contacts between a body and the ground
+  std::vector<size_t> device_rays;  // the rays each device of the backend ran (empty on the CPU backends)
+  std::string cpu_fallback;         // why the step's rays ran on the CPU instead of the devices; empty: they did not
   double kinetic_energy = 0;
   // Set on the steps the interpenetration pass ran (else negative).
   double interpenetration = -1;  // summed depth of every penetrating ray
