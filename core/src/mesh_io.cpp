@@ -160,6 +160,18 @@ int ply_type_size(const std::string& type) {
   return it == sizes.end() ? 0 : it->second;
 }
 
+// A value of an ASCII PLY body as assimp reads one: a sign, then a digit or
+// a point and a digit, and nothing left over (assimp throws on anything else
+// and leaks the mesh it was building).
+bool is_ply_number(const std::string& v) {
+  const size_t d = v[0] == '+' || v[0] == '-' ? 1 : 0;
+  const auto digit = [&](size_t i) { return i < v.size() && std::isdigit(static_cast<unsigned char>(v[i])); };
+  if (!digit(d) && !(d < v.size() && v[d] == '.' && digit(d + 1))) return false;
+  char* end = nullptr;
+  std::strtod(v.c_str(), &end);
+  return end == v.c_str() + v.size();
+}
+
 // The vertex count a PLY file declares. The header is checked line by line,
 // and the body against it (an ASCII body line by line, a binary one by its
 // sizes), before assimp reads the file: assimp 5.2 loops forever on a
@@ -276,7 +288,10 @@ size_t ply_vertex_count(const std::filesystem::path& path) {
         if (p.count_size > 0 && (std::from_chars(v.data(), v.data() + v.size(), count).ptr != v.data() + v.size() ||
                                  count < 0 || size_t(count) >= values.size() - k))
           bad("body", "list count \"" + v.substr(0, 20) + "\" is not the number of values that follow it");
-        k += p.count_size > 0 ? 1 + size_t(count) : 1;
+        const size_t next = p.count_size > 0 ? k + 1 + size_t(count) : k + 1;
+        for (size_t j = p.count_size > 0 ? k + 1 : k; j < next; ++j)
+          if (!is_ply_number(values[j])) bad("body", "\"" + values[j].substr(0, 20) + "\" is not a number");
+        k = next;
       }
       if (k != values.size()) bad("body", "more values than the header's " + e.name + " properties");
     }

@@ -9,6 +9,8 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rtcd/mesh.hpp"
+
 namespace rtcd::sim {
 namespace {
 
@@ -166,11 +168,15 @@ BodySpec read_body(Object o, size_t index, const std::string& folder, const Scen
   if (o.has("sphere")) {
     ++shapes;
     b.sphere = o.positive("sphere", 1e6);
+    if (2 * *b.sphere < kMinBodySize)
+      o.fail(o.key("sphere"), "is below the smallest body the narrow phase takes (a diagonal of 1e-9)");
   }
   if (o.has("box")) {
     ++shapes;
     b.box = o.vector("box", Eigen::Vector3d::Ones(), 1e6);
     if ((b.box->array() <= 0).any()) o.fail(o.key("box"), "half extents must be > 0");
+    if (2 * b.box->norm() < kMinBodySize)
+      o.fail(o.key("box"), "is below the smallest body the narrow phase takes (a diagonal of 1e-9)");
   }
   if (shapes != 1) o.fail(o.where(), shapes ? "names more than one shape (mesh, blob, sphere, box)" : "needs a shape: mesh, blob, sphere or box");
 

@@ -371,6 +371,9 @@ TEST(Sim, BadScenesNameTheKey) {
   expect_scene_error(R"({"effects": ["contacts", "predictive"], "narrow_phase": {"predictive": true}, )" + body + "}",
                      "narrow_phase.predictive: conflicts with effects");
   expect_scene_error(R"({"effects": [], "bodies": [{"box": [1, 1, 1], "mass": -2}]})", "bodies[0].mass");
+  // Below the narrow phase's smallest body: the loader says so (scene fuzzer).
+  expect_scene_error(R"({"effects": [], "bodies": [{"sphere": 1e-12}]})", "bodies[0].sphere: is below the smallest body");
+  expect_scene_error(R"({"effects": [], "bodies": [{"box": [1e-12, 1e-12, 1e-12]}]})", "bodies[0].box: is below");
   expect_scene_error(R"({"effects": [], "bodies": [{"mesh": "../meshes/nowhere.obj"}]})",
                      "bodies[0].mesh: no such mesh file");
   expect_scene_error(R"({"effects": [], "bodies": [{"box": [1, 1, 1], "grid": {"cells": [2, 1]}}]})",

@@ -291,6 +291,13 @@ TEST_F(MeshFiles, PlyAsciiBodyIsCheckedAgainstItsHeader) {
   expect_file_error(write("nul.ply", header + std::string("3\0 0 1 2\n", 9)), "list count");
   expect_file_error(write("extra.ply", header + "3 0 1 2 7\n"), "more values than the header's face properties");
   expect_file_error(write("short.ply", header.substr(0, header.size() - 6)), "PLY body ends at vertex 2 of 3");
+  // A value that is not a number makes assimp throw and leak the mesh it was
+  // building (fuzz/regressions/mesh_file/ply_leak_malformed_body): refused first.
+  const std::string vertices = header.substr(0, header.find("0 0 0\n"));
+  expect_file_error(write("word.ply", vertices + "0 0 0\n1 ;0 0\n0 1 0\n3 0 1 2\n"),
+                    "PLY body line 11 (\"1 ;0 0\"): \";0\" is not a number");
+  expect_file_error(write("index.ply", header + "3 0 x 2\n"), "\"x\" is not a number");
+  EXPECT_NO_THROW(rtcd::read_mesh_file(write("forms.ply", vertices + "+1 -.5 1e-3\n.5 0. -0\n0 1 0\n3 0 1 2\n")));
 }
 
 TEST_F(MeshFiles, ValidationErrorsNameTheFile) {
