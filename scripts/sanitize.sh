@@ -7,7 +7,8 @@
 # on the brute-force `basic` tracer (minutes instrumented; embree, opencl and
 # opencl-basic run the same cases through the same pipeline) and the CLI's
 # end-to-end bench (Bench.WritesEveryTable runs the bench; the recording
-# reader is fuzzed under ASan by scripts/fuzz.sh). The
+# reader is fuzzed under ASan by scripts/fuzz.sh), and the Embree
+# instruction-set comparison (Embree's own code is not instrumented). The
 # allocation count is not built here (it replaces malloc, which would bypass
 # ASan's allocator).
 # The OpenCL tests run too, on PoCL's CPU devices (ctest sets POCL_DEVICES):
@@ -22,4 +23,4 @@ cmake --build --preset asan
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp}
 export ASAN_OPTIONS=${ASAN_OPTIONS:-fast_unwind_on_malloc=0}
 ctest --preset asan -j2 -LE "differential|consumer" \
-  -E "^Backends/Robustness\.[A-Za-z]+/basic( |$)|^CliFiles\.BenchRunsTheSmallStream" --timeout 600 "$@"
+  -E "^Backends/Robustness\.[A-Za-z]+/basic( |$)|^CliFiles\.BenchRunsTheSmallStream|^Robustness\.EmbreeInstructionSets" --timeout 600 "$@"
