@@ -180,13 +180,6 @@ std::string embree_isa(const std::string& name) {
   throw BackendError("backend '" + name + "': unknown instruction set '" + wanted + "' (" + known + ")");
 }
 
-std::vector<std::string> embree_isas_here() {
-  std::vector<std::string> names;
-  for (const Isa& isa : isas())
-    if (isa.supported) names.push_back(isa.name);
-  return names;
-}
-
 std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const std::string& name, const Config& config) {
   const std::string isa = embree_isa(name);
   return make_pipeline_narrow_phase(name, {embree_description(isa)}, make_cpu_executor(make_embree_tracers(isa)),

@@ -4,7 +4,6 @@
 #pragma once
 
 #include <string>
-#include <vector>
 
 #include "rtcd/cpu_executor.hpp"
 
@@ -18,6 +17,4 @@ std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const std::string& name, c
 std::unique_ptr<MeshTracerFactory> make_embree_tracers(const std::string& isa = "");
 // Embree's version (and the pinned instruction set), for `rtcd backends`.
 std::string embree_description(const std::string& isa = "");
-// The instruction sets `isa=` accepts that this CPU runs, narrowest first.
-std::vector<std::string> embree_isas_here();
 }  // namespace rtcd
