@@ -52,6 +52,7 @@ Pose pose_from(const std::vector<double>& v, const std::string& what) {
 void Knobs::apply(Config& c) const {
   if (no_predictive) c.predictive = false;
   if (no_verify_walks) c.verify_walks = false;
+  if (no_edge_contacts) c.edge_contacts = false;
   if (max_walk_steps) c.max_walk_steps = max_walk_steps;
   if (displacement_threshold) c.displacement_threshold = displacement_threshold;
   if (distance_extension) c.distance_extension = distance_extension;
@@ -68,6 +69,8 @@ void add_knobs(CLI::App& command, Knobs& k) {
   command.add_flag("--no-verify-walks", k.no_verify_walks,
                    "Trust walked contacts without the fold check (faster; concave targets may report a vertex "
                    "in a fold as inside)");
+  command.add_flag("--no-edge-contacts", k.no_edge_contacts,
+                   "Do not test edges (faster; surfaces crossing with no vertex inside are not seen)");
   command.add_option("--max-walk-steps", k.max_walk_steps, "Walk step limit [1, 1000000] (default: derived per pair)");
   command.add_option("--displacement-threshold", k.displacement_threshold,
                      "Equation 2.1 threshold (default: derived per pair)");

@@ -19,6 +19,7 @@ namespace rtcd::cli {
 struct Knobs {
   bool no_predictive = false;
   bool no_verify_walks = false;
+  bool no_edge_contacts = false;
   // Unset: derived per pair (rtcd/limits.hpp).
   std::optional<uint32_t> max_walk_steps;
   std::optional<double> displacement_threshold;

@@ -2,6 +2,7 @@
 #include "report.hpp"
 
 #include <cstdio>
+#include <string>
 
 namespace rtcd::cli {
 namespace {
@@ -35,6 +36,9 @@ nlohmann::json stats_json(const StepStats& s) {
           {"rays_retraced", s.rays_retraced},
           {"rays_watched", s.rays_watched},
           {"fold_casts", s.fold_casts},
+          {"edges_tested", s.edges_tested},
+          {"edge_rays", s.edge_rays},
+          {"edge_contacts", s.edge_contacts},
           {"bytes_to_device", s.bytes_to_device},
           {"bytes_from_device", s.bytes_from_device},
           {"devices", devices},
@@ -52,6 +56,8 @@ nlohmann::json to_json(const StepResult& step) {
   nlohmann::json contacts = nlohmann::json::array(), predictive = nlohmann::json::array();
   for (const Contact& c : step.contacts_of(pair)) {
     nlohmann::json j = record(c);
+    j["kind"] = to_string(c.kind);
+    if (c.kind == ContactKind::edge) j["edge"] = {c.edge[0], c.edge[1]};
     j["depth"] = c.depth;
     j["projected_depth"] = c.projected_depth;
     contacts.push_back(j);
@@ -71,35 +77,40 @@ nlohmann::json to_json(const StepResult& step) {
 
 void print_table(std::ostream& out, const StepResult& step) {
   const PairResult& pair = step.pairs.at(0);
-  char line[256];
+  char line[512];
   std::snprintf(line, sizeof line, "colliding: %s   mode: %s   contacts: %zu   max depth: %.6g   predictive: %zu\n",
                 pair.colliding ? "yes" : "no", to_string(pair.mode), pair.contact_count, pair.max_depth,
                 pair.predictive_count);
   out << line;
-  auto row = [&](const RayRecord& r, double value, const char* projected) {
-    std::snprintf(line, sizeof line, "  %-3s %6u %8d %11.6g %11s  (%9.4f %9.4f %9.4f)  (%7.4f %7.4f %7.4f)\n",
-                  r.source == Side::a ? "a" : "b", r.vertex, r.triangle, value, projected, r.origin.x(),
+  // The source's vertex, or its edge as "v0-v1".
+  auto row = [&](const RayRecord& r, const std::string& from, double value, const char* projected) {
+    std::snprintf(line, sizeof line, "  %-3s %13s %8d %11.6g %11s  (%9.4f %9.4f %9.4f)  (%7.4f %7.4f %7.4f)\n",
+                  r.source == Side::a ? "a" : "b", from.c_str(), r.triangle, value, projected, r.origin.x(),
                   r.origin.y(), r.origin.z(), r.normal.x(), r.normal.y(), r.normal.z());
     out << line;
   };
   char projected[32];
   if (pair.contact_count > 0) {
-    out << "  src vertex triangle       depth   projected  origin                           normal\n";
+    out << "  src vertex or edge triangle       depth   projected  origin                           normal\n";
     for (const Contact& c : step.contacts_of(pair)) {
       std::snprintf(projected, sizeof projected, "%.6g", c.projected_depth);
-      row(c, c.depth, projected);
+      row(c,
+          c.kind == ContactKind::edge ? std::to_string(c.edge[0]) + "-" + std::to_string(c.edge[1])
+                                      : std::to_string(c.vertex),
+          c.depth, projected);
     }
   }
   if (pair.predictive_count > 0) {
-    out << "  predictive rays:\n  src vertex triangle    distance           -  origin                           normal\n";
-    for (const PredictiveRay& p : step.predictive_of(pair)) row(p, p.distance, "-");
+    out << "  predictive rays:\n  src vertex or edge triangle    distance           -  origin                           normal\n";
+    for (const PredictiveRay& p : step.predictive_of(pair)) row(p, std::to_string(p.vertex), p.distance, "-");
   }
   const StepStats& s = step.stats;
   std::snprintf(line, sizeof line,
                 "rays: %zu full, %zu predictive, %zu iterative (%zu traced again, %zu watched, %zu fold casts); "
-                "candidates %zu; nearest queries %zu; walk steps %zu; time %.3f ms\n",
+                "candidates %zu; nearest queries %zu; walk steps %zu; edges %zu tested (%zu rays, %zu crossing); "
+                "time %.3f ms\n",
                 s.rays_full, s.rays_predictive, s.rays_iterative, s.rays_retraced, s.rays_watched, s.fold_casts,
-                s.candidates, s.nearest_queries, s.walk_steps,
+                s.candidates, s.nearest_queries, s.walk_steps, s.edges_tested, s.edge_rays, s.edge_contacts,
                 1e3 * (s.seconds_prepare + s.seconds_full + s.seconds_iterative + s.seconds_gather));
   out << line;
 }

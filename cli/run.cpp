@@ -158,6 +158,7 @@ int run_scene(const RunOptions& o) {
         {"predictive", scene.narrow.predictive},
         {"projected", scene.narrow.projected},
         {"verify_walks", scene.narrow.verify_walks},
+        {"edge_contacts", scene.narrow.edge_contacts},
         {"max_walk_steps", limit_json(scene.narrow.max_walk_steps)},
         {"displacement_threshold", limit_json(scene.narrow.displacement_threshold)},
         {"distance_extension", limit_json(scene.narrow.distance_extension)},

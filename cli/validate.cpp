@@ -16,12 +16,13 @@ namespace {
 
 void print_row(const validation::Summary& s) {
   auto ratio = [&](double oracle) { return s.time_ours > 0 && oracle > 0 ? oracle / s.time_ours : 0.0; };
-  std::printf("%-10s %-6s %-9s %5zu %5.1f%% %7zu %8.2e %8.2e %5zu %8.1e %9.1f %8.1f", s.family.c_str(),
+  std::printf("%-10s %-6s %-9s %5zu %5.1f%% %7zu %8.2e %8.2e %5zu %6zu %6zu %8.1e %9.1f %8.1f", s.family.c_str(),
               s.backend.c_str(), to_string(s.mode), s.pairs, 100 * s.colliding_fraction(), s.deep, s.missed_rate(),
-              s.missed_p99, s.false_rays, s.max_relative_depth_error, 1e6 * s.time_ours, 1e6 * s.time_exact);
+              s.missed_p99, s.false_rays, s.missed_pairs, s.false_pairs, s.max_relative_depth_error,
+              1e6 * s.time_ours, 1e6 * s.time_exact);
   if (s.with_oracles)
-    std::printf(" %6.2f%% %4zu/%-4zu %5.2f%% %6.2f%% %8.1f %8.1f %8.1f  %5.2f %5.2f %5.2f", 100 * s.fcl_agreement(),
-                s.fcl_blind_contained, s.contained, 100 * s.edge_edge_rate(), 100 * s.gimpact_agreement(),
+    std::printf(" %6.2f%% %4zu/%-4zu %7zu %6.2f%% %8.1f %8.1f %8.1f  %5.2f %5.2f %5.2f", 100 * s.fcl_agreement(),
+                s.fcl_blind_contained, s.contained, s.fcl_missed_pairs, 100 * s.gimpact_agreement(),
                 1e6 * s.time_fcl, 1e6 * s.time_fcl_contacts, 1e6 * s.time_gimpact, ratio(s.time_fcl),
                 ratio(s.time_fcl_contacts), ratio(s.time_gimpact));
   std::printf("\n");
@@ -71,9 +72,9 @@ int run_validate(const ValidateOptions& o) {
   run.with_oracles = !o.no_oracles;
   nlohmann::json all = nlohmann::json::array();
   if (!o.json)
-    std::printf("%-10s %-6s %-9s %5s %6s %7s %8s %8s %5s %8s %9s %8s%s\n", "family", "backend", "mode", "pairs", "coll",
-                "deep", "missed", "miss p99", "false", "depth re", "ours us", "exact us",
-                o.no_oracles ? "" : "  FCL agr FCL blind    e-e GIM agr   FCL us  FCLc us   GIM us   xFCL xFCLc  xGIM");
+    std::printf("%-10s %-6s %-9s %5s %6s %7s %8s %8s %5s %6s %6s %8s %9s %8s%s\n", "family", "backend", "mode", "pairs",
+                "coll", "deep", "missed", "miss p99", "false", "mpairs", "fpairs", "depth re", "ours us", "exact us",
+                o.no_oracles ? "" : "  FCL agr FCL blind FCLmiss GIM agr   FCL us  FCLc us   GIM us   xFCL xFCLc  xGIM");
   for (const auto& family_name : families) {
     const validation::Family family = validation::make_family(family_name);
     warn_if_self_intersecting(*family.a, "family:" + family_name + ":a");

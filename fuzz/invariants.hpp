@@ -101,10 +101,11 @@ inline void check_step(const std::string& backend, const StepResult& r, BodyPair
   }
 }
 
-// (source, vertex) of every penetrating ray, with its depth.
+// (source, vertex) of every penetrating vertex ray.
 inline std::set<std::pair<int, uint32_t>> penetrating(const StepResult& r) {
   std::set<std::pair<int, uint32_t>> s;
-  for (const Contact& c : r.contacts) s.insert({int(c.source), c.vertex});
+  for (const Contact& c : r.contacts)
+    if (c.kind == ContactKind::vertex) s.insert({int(c.source), c.vertex});
   return s;
 }
 
@@ -174,7 +175,8 @@ void check_same_contacts(const std::string& name_x, const StepResult& x, const s
   auto one_way = [&](const std::string& has, const StepResult& r, const std::string& lacks, const StepResult& other) {
     const auto theirs = penetrating(other);
     for (const Contact& c : r.contacts)
-      if (!theirs.contains({int(c.source), c.vertex}) && !(c.depth <= band) && (strict || !tie(c)))
+      if (c.kind == ContactKind::vertex && !theirs.contains({int(c.source), c.vertex}) && !(c.depth <= band) &&
+          (strict || !tie(c)))
         violated(has + " reports vertex " + std::to_string(c.vertex) + " of body " +
                  (c.source == Side::a ? "a" : "b") + " penetrating at depth " + num(c.depth) + " (triangle " +
                  std::to_string(c.triangle) + "), " + lacks + " does not (band " + num(band) + ")");

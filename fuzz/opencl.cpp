@@ -48,7 +48,8 @@ void require_same(const StepResult& x, const StepResult& y, const std::string& w
                   where + ": different pair summaries");
   for (size_t k = 0; k < x.contacts.size(); ++k) {
     const Contact &a = x.contacts[k], &b = y.contacts[k];
-    fuzz::require(same(a, b) && a.depth == b.depth && a.projected_depth == b.projected_depth && a.push == b.push,
+    fuzz::require(same(a, b) && a.kind == b.kind && a.edge == b.edge && a.depth == b.depth &&
+                      a.projected_depth == b.projected_depth && a.push == b.push,
                   where + ": contact " + std::to_string(k) + " differs (vertex " + std::to_string(a.vertex) + ", " +
                       std::to_string(b.vertex) + ")");
   }
@@ -59,7 +60,8 @@ void require_same(const StepResult& x, const StepResult& y, const std::string& w
   fuzz::require(a.candidates == b.candidates && a.rays_full == b.rays_full && a.rays_predictive == b.rays_predictive &&
                     a.rays_iterative == b.rays_iterative && a.walk_steps == b.walk_steps &&
                     a.nearest_queries == b.nearest_queries && a.rays_retraced == b.rays_retraced &&
-                    a.rays_watched == b.rays_watched && a.walk_endings == b.walk_endings,
+                    a.rays_watched == b.rays_watched && a.walk_endings == b.walk_endings &&
+                    a.edges_tested == b.edges_tested && a.edge_rays == b.edge_rays && a.edge_contacts == b.edge_contacts,
                 where + ": different statistics");
 }
 
@@ -77,7 +79,8 @@ void require_on_devices(const StepResult& step, bool first, const std::string& w
     jobs += d.jobs;
     busy += d.jobs > 0;
   }
-  fuzz::require(rays == s.candidates, where + ": " + std::to_string(s.candidates - rays) + " rays not run on a device");
+  const size_t items = s.candidates + s.edges_tested;
+  fuzz::require(rays == items, where + ": " + std::to_string(items - rays) + " rays and edges not run on a device");
   if (first) fuzz::require(busy == std::min(jobs, s.devices.size()), where + ": jobs left on one device");
 }
 

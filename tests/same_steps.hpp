@@ -78,6 +78,8 @@ inline void expect_same_step(const StepResult& x, const StepResult& y, const std
   ASSERT_EQ(x.contacts.size(), y.contacts.size());
   for (size_t k = 0; k < x.contacts.size(); ++k) {
     expect_same_record(x.contacts[k], y.contacts[k]);
+    EXPECT_EQ(x.contacts[k].kind, y.contacts[k].kind);
+    EXPECT_EQ(x.contacts[k].edge, y.contacts[k].edge);
     EXPECT_EQ(x.contacts[k].depth, y.contacts[k].depth);
     EXPECT_EQ(x.contacts[k].projected_depth, y.contacts[k].projected_depth);
     EXPECT_EQ(x.contacts[k].push, y.contacts[k].push);
@@ -101,6 +103,9 @@ inline void expect_same_step(const StepResult& x, const StepResult& y, const std
   EXPECT_EQ(a.rays_watched, b.rays_watched);
   EXPECT_EQ(a.fold_casts, b.fold_casts);
   EXPECT_EQ(a.walk_endings, b.walk_endings);
+  EXPECT_EQ(a.edges_tested, b.edges_tested);
+  EXPECT_EQ(a.edge_rays, b.edge_rays);
+  EXPECT_EQ(a.edge_contacts, b.edge_contacts);
 }
 
 // Where two runs of one backend sent their rays: the same bytes to and from

@@ -14,6 +14,7 @@
 
 #include "rtcd/error.hpp"
 #include "rtcd/kernel/nearest.h"
+#include "rtcd/kernel/tracer.h"
 
 namespace rtcd {
 namespace {
@@ -115,7 +116,7 @@ class EmbreeTracer final : public MeshTracer {
     query.radius = radius;
     RTCPointQueryContext context;
     rtcInitPointQueryContext(&context);
-    Nearest found{this, point, -1};
+    Nearest found{this, point, -1, radius * radius};
     rtcPointQuery(scene_, &query, &context, &EmbreeTracer::visit, &found);
     return found.triangle;
   }
@@ -125,9 +126,13 @@ class EmbreeTracer final : public MeshTracer {
     const EmbreeTracer* tracer;
     rtcd_vec3 point;
     int32_t triangle;
+    float best_d2;
   };
   // Embree calls this for every triangle whose box meets the query sphere;
-  // shrinking the radius prunes the rest.
+  // shrinking the radius prunes the rest. The tie rule of tracer.h (the
+  // lowest id among equal distances, as the brute force and the device's
+  // BVH): the radius shrinks to just past the best distance, so a triangle
+  // as near is still visited, whatever order the instruction set visits in.
   static bool visit(RTCPointQueryFunctionArguments* args) {
     auto* found = static_cast<Nearest*>(args->userPtr);
     const Mesh& mesh = found->tracer->mesh_;
@@ -137,10 +142,12 @@ class EmbreeTracer final : public MeshTracer {
       const Eigen::Vector3f& p = mesh.positions()[i];
       return rtcd_v3(p.x(), p.y(), p.z());
     };
-    const float d = std::sqrt(rtcd_point_triangle_distance2(found->point, v(tri[0]), v(tri[1]), v(tri[2])));
-    if (d > args->query->radius || (found->triangle >= 0 && d == args->query->radius)) return false;
-    args->query->radius = d;
-    found->triangle = int32_t(args->primID);
+    const float d2 = rtcd_point_triangle_distance2(found->point, v(tri[0]), v(tri[1]), v(tri[2]));
+    const int32_t id = int32_t(args->primID);
+    if (!(d2 <= found->best_d2) || !rtcd_nearer(found->best_d2, found->triangle, d2, id)) return false;
+    found->best_d2 = d2;
+    found->triangle = id;
+    args->query->radius = std::sqrt(d2) * (1.0f + 1e-6f) + 1e-30f;
     return true;
   }
 

@@ -59,6 +59,12 @@ RTCD_INLINE int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_
   return rtcd_fold_free(face, origin, toward, reach, t->normals, t->fold_faces, t->ring_first, t->ring);
 }
 
+RTCD_INLINE float rtcd_tracer_distance2(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 point) {
+  return rtcd_point_triangle_distance2(point, t->positions[t->triangles[3 * triangle]],
+                                       t->positions[t->triangles[3 * triangle + 1]],
+                                       t->positions[t->triangles[3 * triangle + 2]]);
+}
+
 #include "rtcd/kernel/trace.h"
 
 /* The job holding item (or ray) i: the last job whose first index is <= i. */
@@ -72,8 +78,8 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
   return lo;
 }
 
-/* One full job: the origins of its near leaves, in vertex order, listed as
- * its items (the host counted them). */
+/* One full job: the source items (origins, then edges) of its near leaves,
+ * in item order, listed as its items (the host counted them). */
 __kernel void rtcd_list(__global const rtcd_device_job* jobs, rtcd_uint job_count,
                         __global const rtcd_device_shape* shapes, __global const rtcd_uint* source_leaves,
                         __global const rtcd_uint* near_bits, __global rtcd_uint* vertices) {
@@ -119,7 +125,7 @@ RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jo
   frame = frames[j];
   c->origin = rtcd_v3(0.0f, 0.0f, 0.0f);
   c->direction = c->origin;
-  return rtcd_place_ray(&frame, origins[s], directions[s], &c->origin, &c->direction);
+  return rtcd_place_item(&frame, &job.params, c->vertex, origins[s], directions[s], &c->origin, &c->direction);
 }
 
 /* Compacted layout, one item: placed and flagged, for rtcd_count and
@@ -192,8 +198,13 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
     t.primitives = primitives + shape.first_primitive;
     t.triangle_count = shape.triangle_count;
     t.node_count = shape.node_count;
-    if (p.iterative) rtcd_walk_trace(&t, &p, c, &o);
+    if (c->vertex >= p.first_edge) rtcd_edge_trace(&t, &p, c, &o);
+    else if (p.iterative) rtcd_walk_trace(&t, &p, c, &o);
     else rtcd_full_trace(&t, &p, c, 0, &o);
+  } else if (c->vertex >= p.first_edge && p.source_radius > 0.0f) {
+    rtcd_sphere_trace(shape.kind, shape.radius, shape.half_extents, &p, c, &o);
+  } else if (c->vertex >= p.first_edge) {
+    rtcd_edge_volume_trace(shape.kind, shape.radius, shape.half_extents, &p, c, &o);
   } else {
     rtcd_volume_trace(shape.kind, shape.radius, shape.half_extents, &p, c, &o);
   }

@@ -3,12 +3,12 @@
 // the devices (a pair that walks stays on the device holding its tracked
 // rays; the others go to the least loaded by expected rays), each device
 // with its own queue, and all devices run at once:
-//   1. rtcd_select: every possible ray (source vertex, or tracked ray) placed
-//      in the target's frame in double and flagged when it is a candidate
-//      (the host places them when a device lacks fp64); a full job's
-//      possible rays are the origins of the source-tree leaves near its
-//      overlap box, which the host finds and sends as one bit per node, and
-//      rtcd_list lists in vertex order;
+//   1. rtcd_select: every possible ray (source item: a vertex or an edge,
+//      or tracked ray) placed in the target's frame in double and flagged
+//      when it is a candidate (the host places them when a device lacks
+//      fp64); a full job's possible rays are the items of the source-tree
+//      leaves near its overlap box, which the host finds and sends as one
+//      bit per node, and rtcd_list lists in item order;
 //   2. rtcd_count: per job, a prefix sum over the flags, so the candidates
 //      form a compacted list in the CPU's order; the counts come back;
 //   3. rtcd_scatter and rtcd_trace: candidates to their places, then one
@@ -49,8 +49,8 @@ namespace {
 static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // The kernels read the buffers with OpenCL C's layout of the same structs:
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
-static_assert(sizeof(rtcd_outcome) == 28 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 52);
-static_assert(sizeof(rtcd_device_job) == 76 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_outcome) == 28 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 64);
+static_assert(sizeof(rtcd_device_job) == 88 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8);
 
 constexpr size_t kGroupSize = 64;
@@ -292,14 +292,18 @@ struct ShapeData {
     d.first_node = rtcd_uint(nodes.size());
     d.first_primitive = rtcd_uint(primitives.size());
     d.first_source = rtcd_uint(origins.size());
-    d.source_count = rtcd_uint(shape.sources().origins.size());
     const RaySources& rs = shape.sources();
-    append(origins, rs.origins);
-    append(directions, rs.directions);
+    d.source_count = rs.item_count();
+    // Items as rtcd_place_item reads them: origins, then edges.
+    for (uint32_t i = 0; i < rs.item_count(); ++i) {
+      const Eigen::Vector3f o = rs.item_origin(i), dir = rs.item_direction(i);
+      origins.push_back(rtcd_v3(o.x(), o.y(), o.z()));
+      directions.push_back(rtcd_v3(dir.x(), dir.y(), dir.z()));
+    }
     source_leaves.resize(origins.size(), 0);
     for (uint32_t n = 0; n < rs.nodes.size(); ++n)
       if (rs.nodes[n].child == 0)
-        for (uint32_t v : rs.origins_of(n)) source_leaves[d.first_source + v] = n;
+        for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = n;
     if (const Mesh* mesh = shape.mesh()) {
       d.kind = RTCD_TARGET_MESH;
       d.triangle_count = rtcd_uint(mesh->triangle_count());
@@ -581,13 +585,13 @@ class OpenClExecutor final : public RayExecutor {
     }
   }
 
-  // A job's items: its tracked rays, or the origins of its near leaves.
+  // A job's items: its tracked rays, or the items (origins and edges) of its near leaves.
   // Their count is also the rays it is expected to cast, by which jobs are
   // spread over the devices.
   void add(Device& d, uint32_t j, const RayJob& job, const Config& config) {
     rtcd_device_job dj{};
     const size_t items = job.overlap.empty() ? 0 : job.iterative ? job.tracked.size() : mark_near_leaves(d, job, dj);
-    dj.params = make_trace_params(job, *shapes_[job.target], config);
+    dj.params = make_trace_params(job, *shapes_[job.source], *shapes_[job.target], config);
     dj.source = job.source;
     dj.target = job.target;
     dj.first_item = d.items;
@@ -610,29 +614,29 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves), as bits
-  // by node appended to the batch's; returns how many origins they hold.
+  // by node appended to the batch's; returns how many items they hold.
   size_t mark_near_leaves(Device& d, const RayJob& job, rtcd_device_job& dj) const {
     const RaySources& rs = shapes_[job.source]->sources();
     dj.first_near = rtcd_uint(d.host_near.size());
     d.host_near.resize(d.host_near.size() + (rs.nodes.size() + 31) / 32, 0);
     rtcd_uint* bits = d.host_near.data() + dj.first_near;
-    size_t origins = 0;
+    size_t items = 0;
     visit_near_leaves(job, rs, [&](uint32_t n) {
       bits[n / 32] |= rtcd_uint(1) << (n % 32);
-      origins += rs.origins_of(n).size();
+      items += rs.items_of(n).size();
     });
-    return origins;
+    return items;
   }
 
-  // The host's placement, for devices without fp64: the same rtcd_place_ray.
+  // The host's placement, for devices without fp64: the same rtcd_place_item.
   void place_on_host(Device& d) {
     d.host_rays.clear();
     for (uint32_t l = 0; l < d.host_jobs.size(); ++l) {
       const rtcd_device_job& job = d.host_jobs[l];
       const RaySources& rs = shapes_[job.source]->sources();
       const rtcd_uint* leaves = data_.source_leaves.data() + data_.table[job.source].first_source;
-      // Tracked rays, or every origin of the near leaves (rtcd_list).
-      const uint32_t count = job.params.iterative || job.item_count == 0 ? job.item_count : uint32_t(rs.origins.size());
+      // Tracked rays, or every item of the near leaves (rtcd_list).
+      const uint32_t count = job.params.iterative || job.item_count == 0 ? job.item_count : rs.item_count();
       for (uint32_t k = 0; k < count; ++k) {
         rtcd_candidate c{k, -1, -1, l, {}, {}};
         if (!job.params.iterative && !rtcd_near_leaf(d.host_near.data() + job.first_near, leaves[k])) continue;
@@ -642,10 +646,9 @@ class OpenClExecutor final : public RayExecutor {
           c.start = r.triangle;
           c.entry = r.entry;
         }
-        const auto& o = rs.origins[c.vertex];
-        const auto& dir = rs.directions[c.vertex];
-        if (rtcd_place_ray(&d.host_frames[l], rtcd_v3(o.x(), o.y(), o.z()), rtcd_v3(dir.x(), dir.y(), dir.z()),
-                           &c.origin, &c.direction)) {
+        const Eigen::Vector3f o = rs.item_origin(c.vertex), dir = rs.item_direction(c.vertex);
+        if (rtcd_place_item(&d.host_frames[l], &job.params, c.vertex, rtcd_v3(o.x(), o.y(), o.z()),
+                            rtcd_v3(dir.x(), dir.y(), dir.z()), &c.origin, &c.direction)) {
           d.host_rays.push_back(c);
           ++d.host_counts[l];
         }

@@ -11,7 +11,9 @@
 
 #include "parallel.hpp"
 #include "rtcd/error.hpp"
+#include "rtcd/kernel/brute.h"
 #include "rtcd/kernel/fold.h"
+#include "rtcd/kernel/nearest.h"
 #include "rtcd/kernel/walk.h"
 
 // The CPU side of the tracer that kernel/trace.h calls: a MeshTracer and its mesh.
@@ -19,9 +21,20 @@ struct rtcd_tracer {
   const rtcd::MeshTracer* tracer;
   const rtcd::Mesh* mesh;
 };
+// The distance of a hit as the shared locate code measures it (what the
+// brute force and the device report), so a tracer's own arithmetic (Embree's
+// differs between instruction sets) reaches no result; the tracer's own
+// where the watertight test puts the line just outside the triangle.
 static rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
   const rtcd::TraceHit h = t->tracer->first_hit(*ray, t_max);
-  return {h.triangle, h.t};
+  if (h.triangle < 0) return {h.triangle, h.t};
+  const auto& tri = t->mesh->triangles()[size_t(h.triangle)];
+  const auto corner = [&](int k) {
+    const Eigen::Vector3f& v = t->mesh->positions()[tri[k]];
+    return rtcd_v3(v.x(), v.y(), v.z());
+  };
+  const float located = rtcd_hit_distance(ray, corner(0), corner(1), corner(2));
+  return {h.triangle, located >= 0.0f && located <= t_max ? located : h.t};
 }
 static rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius) {
   return t->tracer->nearest(point, radius);
@@ -42,6 +55,16 @@ static int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 
   const rtcd::Mesh::FoldGuard& g = m.fold_guard();
   return rtcd_fold_free(face, origin, toward, reach, reinterpret_cast<const rtcd_vec3*>(m.triangle_normals().data()),
                         reinterpret_cast<const rtcd_fold_face*>(g.faces.data()), g.ring_first.data(), g.ring.data());
+}
+
+static float rtcd_tracer_distance2(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 point) {
+  const rtcd::Mesh& m = *t->mesh;
+  const auto& tri = m.triangles()[size_t(triangle)];
+  const auto corner = [&](int k) {
+    const Eigen::Vector3f& v = m.positions()[tri[k]];
+    return rtcd_v3(v.x(), v.y(), v.z());
+  };
+  return rtcd_point_triangle_distance2(point, corner(0), corner(1), corner(2));
 }
 
 #include "rtcd/kernel/trace.h"
@@ -93,15 +116,15 @@ class CpuExecutor final : public RayExecutor {
     if (candidates_.size() < jobs.size()) candidates_.resize(jobs.size());
     if (params_.size() < jobs.size()) params_.resize(jobs.size());
     size_t work = 0;
-    for (const RayJob& job : jobs) work += job.iterative ? job.tracked.size() : shapes_[job.source]->sources().origins.size();
+    for (const RayJob& job : jobs) work += job.iterative ? job.tracked.size() : shapes_[job.source]->sources().item_count();
     const bool walks = !jobs.empty() && jobs.front().iterative;  // the pipeline never mixes modes in a batch
     if (walks) {
       // Walks are short and even: one pass per job, each tracked ray placed
       // and walked at once.
       for_each_index(jobs.size(), work >= kParallelItems, [&](size_t j) {
-        params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
+        params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].source], *shapes_[jobs[j].target], config);
         outcomes[j].clear();
-        for_each_tracked(jobs[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
+        for_each_tracked(jobs[j], params_[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
         tallies[j] = settle_outcomes(outcomes[j], true);
       });
       return {};  // the rays run where they are
@@ -117,10 +140,10 @@ class CpuExecutor final : public RayExecutor {
     const bool at_once = blocks >= kTracedBlocks;
     for_each_index(blocks, work >= kParallelItems, [&](size_t b) {
       for (size_t j = b * kJobsPerBlock; j < std::min(jobs.size(), (b + 1) * kJobsPerBlock); ++j) {
-        params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].target], config);
+        params_[j] = make_trace_params(jobs[j], *shapes_[jobs[j].source], *shapes_[jobs[j].target], config);
         outcomes[j].clear();
         candidates_[j].clear();
-        for_each_selected(jobs[j], marks_[b], [&](const rtcd_candidate& c) {
+        for_each_selected(jobs[j], params_[j], marks_[b], [&](const rtcd_candidate& c) {
           if (at_once) {
             trace(jobs[j], params_[j], c, outcomes[j].emplace_back());
           } else {
@@ -159,58 +182,73 @@ class CpuExecutor final : public RayExecutor {
     uint32_t job, begin, end;
   };
 
-  // A candidate placed in the target's frame (rtcd_place_ray), handed to
-  // `take`; none where the origin is outside the job's overlap box.
+  // A candidate placed in the target's frame (rtcd_place_item), handed to
+  // `take`; none where the item is outside the job's overlap box.
   template <class Take>
-  static void place(const RaySources& rs, const rtcd_frame& frame, uint32_t vertex, int32_t start, int32_t entry,
-                    const Take& take) {
-    rtcd_candidate c{vertex, start, entry, 0, {}, {}};
-    if (rtcd_place_ray(&frame, to_kernel(rs.origins[vertex]), to_kernel(rs.directions[vertex]), &c.origin, &c.direction))
+  static void place(const RaySources& rs, const rtcd_frame& frame, const rtcd_trace_params& params, uint32_t item,
+                    int32_t start, int32_t entry, const Take& take) {
+    rtcd_candidate c{item, start, entry, 0, {}, {}};
+    if (rtcd_place_item(&frame, &params, item, to_kernel(rs.item_origin(item)), to_kernel(rs.item_direction(item)),
+                        &c.origin, &c.direction))
       take(c);
   }
 
   // An iterative job's candidates: its tracked rays, in tracked order.
   template <class Take>
-  void for_each_tracked(const RayJob& job, const Take& take) const {
+  void for_each_tracked(const RayJob& job, const rtcd_trace_params& params, const Take& take) const {
     if (job.overlap.empty()) return;
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
-    for (const RayOutcome& r : job.tracked) place(rs, frame, r.vertex, r.triangle, r.entry, take);
+    for (const RayOutcome& r : job.tracked) place(rs, frame, params, r.vertex, r.triangle, r.entry, take);
   }
 
-  // A full job's candidates, in vertex order: the origins near the overlap
-  // box (visit_near_origins), which `marks` put back in vertex order, then
-  // the exact placement decides.
+  // A full job's candidates, in item order: the items near the overlap box
+  // (visit_near_items), which `marks` put back in item order, then the
+  // exact placement decides.
   template <class Take>
-  void for_each_selected(const RayJob& job, std::vector<uint64_t>& marks, const Take& take) const {
+  void for_each_selected(const RayJob& job, const rtcd_trace_params& params, std::vector<uint64_t>& marks,
+                         const Take& take) const {
     if (job.overlap.empty()) return;
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
-    marks.assign((rs.origins.size() + 63) / 64, 0);
-    visit_near_origins(job, rs, [&](uint32_t v) { marks[v / 64] |= uint64_t(1) << (v % 64); });
+    marks.assign((rs.item_count() + 63) / 64, 0);
+    visit_near_items(job, rs, [&](uint32_t v) { marks[v / 64] |= uint64_t(1) << (v % 64); });
     for (size_t w = 0; w < marks.size(); ++w)
       for (uint64_t bits = marks[w]; bits != 0; bits &= bits - 1)
-        place(rs, frame, uint32_t(64 * w + std::countr_zero(bits)), -1, -1, take);
+        place(rs, frame, params, uint32_t(64 * w + std::countr_zero(bits)), -1, -1, take);
   }
 
   void trace(const RayJob& job, const rtcd_trace_params& params, const rtcd_candidate& c, RayOutcome& o) const {
     rtcd_outcome_init(&o, c.vertex);
     const Shape& target = *shapes_[job.target];
+    const bool edge = c.vertex >= params.first_edge;
     if (const Mesh* mesh = target.mesh()) {
       const rtcd_tracer tracer{tracers_[job.target].get(), mesh};
-      if (job.iterative) {
+      if (edge) {
+        rtcd_edge_trace(&tracer, &params, &c, &o);
+      } else if (job.iterative) {
         rtcd_walk_trace(&tracer, &params, &c, &o);
       } else {
         rtcd_full_trace(&tracer, &params, &c, 0, &o);
       }
     } else {
       const auto& shape = target.geometry();
+      int kind = RTCD_TARGET_HALFSPACE;
+      float radius = 0.0f;
+      rtcd_vec3 half = rtcd_v3(0, 0, 0);
       if (const auto* sphere = std::get_if<Sphere>(&shape)) {
-        rtcd_volume_trace(RTCD_TARGET_SPHERE, float(sphere->radius), rtcd_v3(0, 0, 0), &params, &c, &o);
+        kind = RTCD_TARGET_SPHERE;
+        radius = float(sphere->radius);
       } else if (const auto* box = std::get_if<Box>(&shape)) {
-        rtcd_volume_trace(RTCD_TARGET_BOX, 0.0f, to_kernel(box->half_extents.cast<float>().eval()), &params, &c, &o);
+        kind = RTCD_TARGET_BOX;
+        half = to_kernel(box->half_extents.cast<float>().eval());
+      }
+      if (edge && params.source_radius > 0.0f) {
+        rtcd_sphere_trace(kind, radius, half, &params, &c, &o);
+      } else if (edge) {
+        rtcd_edge_volume_trace(kind, radius, half, &params, &c, &o);
       } else {
-        rtcd_volume_trace(RTCD_TARGET_HALFSPACE, 0.0f, rtcd_v3(0, 0, 0), &params, &c, &o);
+        rtcd_volume_trace(kind, radius, half, &params, &c, &o);
       }
     }
   }
@@ -230,7 +268,7 @@ std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory
   return std::make_unique<CpuExecutor>(std::move(tracers));
 }
 
-rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, const Config& config) {
+rtcd_trace_params make_trace_params(const RayJob& job, const Shape& source, const Shape& target, const Config& config) {
   // Watching serves only later walks, which full mode never makes; it
   // belongs to the predictive logic and is off with it.
   const bool watch = config.predictive && config.mode != Mode::full;
@@ -247,6 +285,13 @@ rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, cons
   // A convex target cannot fold between a ray's entry and exit faces.
   p.verify = config.verify_walks && !(target.mesh() && target.mesh()->convex());
   p.iterative = job.iterative;
+  p.first_edge = source.sources().first_edge();
+  p.source_radius = source.sources().sphere_radius;
+  // A half-space needs no edge test: a body crossing its plane has an
+  // origin below it. A sphere has no edges: its deepest point is tested
+  // against spheres and boxes only.
+  p.edges = config.edge_contacts && !std::holds_alternative<HalfSpace>(target.geometry()) &&
+            !(p.source_radius > 0.0f && target.mesh());
   return p;
 }
 

@@ -129,6 +129,9 @@ void Config::validate() const {
 }
 
 const char* to_string(PairMode mode) { return mode == PairMode::full ? "full" : "iterative"; }
+const char* to_string(ContactKind kind) {
+  return kind == ContactKind::vertex ? "vertex" : kind == ContactKind::edge ? "edge" : "sphere";
+}
 
 RayCounts& RayCounts::operator+=(const RayCounts& o) {
   candidates += o.candidates;
@@ -140,6 +143,9 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
   rays_retraced += o.rays_retraced;
   rays_watched += o.rays_watched;
   fold_casts += o.fold_casts;
+  edges_tested += o.edges_tested;
+  edge_rays += o.edge_rays;
+  edge_contacts += o.edge_contacts;
   for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) walk_endings[e] += o.walk_endings[e];
   return *this;
 }

@@ -41,18 +41,32 @@ constexpr uint32_t kSourcesPerLeaf = 16;
 
 void RaySources::index() {
   nodes.clear();
-  order.resize(origins.size());
+  const uint32_t items = item_count();
+  order.resize(items);
   std::iota(order.begin(), order.end(), 0u);
-  if (origins.empty()) return;
-  nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), 0, uint32_t(origins.size()), 0});
-  // Each node's box, then a split at the median of its longest axis (ties
-  // by index, so the tree is the same on every run).
+  if (items == 0) return;
+  // Each item's box: an origin's point, an edge's two ends, a sphere's
+  // bounds for its deepest point.
+  std::vector<Eigen::Vector3f> lows(items), highs(items);
+  for (uint32_t i = 0; i < items; ++i) {
+    const Eigen::Vector3f a = item_origin(i), b = i < first_edge() ? a : Eigen::Vector3f(a + item_direction(i));
+    lows[i] = a.cwiseMin(b);
+    highs[i] = a.cwiseMax(b);
+    if (i >= first_edge() && sphere_radius > 0.0f) {
+      lows[i] = Eigen::Vector3f::Constant(-sphere_radius);
+      highs[i] = Eigen::Vector3f::Constant(sphere_radius);
+    }
+  }
+  nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), 0, items, 0});
+  // Each node's box, then a split at the median of the item boxes' centres
+  // along its longest axis (ties by index, so the tree is the same on
+  // every run).
   for (size_t i = 0; i < nodes.size(); ++i) {
     const uint32_t begin = nodes[i].begin, end = nodes[i].end;
-    Eigen::Vector3f lo = origins[order[begin]], hi = lo;
+    Eigen::Vector3f lo = lows[order[begin]], hi = highs[order[begin]];
     for (uint32_t k = begin; k < end; ++k) {
-      lo = lo.cwiseMin(origins[order[k]]);
-      hi = hi.cwiseMax(origins[order[k]]);
+      lo = lo.cwiseMin(lows[order[k]]);
+      hi = hi.cwiseMax(highs[order[k]]);
     }
     nodes[i].lo = lo;
     nodes[i].hi = hi;
@@ -60,8 +74,9 @@ void RaySources::index() {
     int axis = 0;
     (hi - lo).maxCoeff(&axis);
     const uint32_t mid = begin + (end - begin) / 2;
+    auto centre = [&](uint32_t item) { return lows[item][axis] + highs[item][axis]; };
     std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](uint32_t a, uint32_t b) {
-      return origins[a][axis] < origins[b][axis] || (origins[a][axis] == origins[b][axis] && a < b);
+      return centre(a) < centre(b) || (centre(a) == centre(b) && a < b);
     });
     nodes[i].child = uint32_t(nodes.size());
     nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), begin, mid, 0});
@@ -74,6 +89,12 @@ Shape::Shape(Mesh mesh) : geometry_(std::move(mesh)) {
   sources_.origins.assign(m.positions().begin(), m.positions().end());
   sources_.directions.reserve(m.vertex_count());
   for (const auto& n : m.vertex_normals()) sources_.directions.push_back(-n);
+  // Each edge once: the triangles' edges, ordered and deduplicated.
+  for (const auto& t : m.triangles())
+    for (int k = 0; k < 3; ++k)
+      sources_.edges.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3])});
+  std::sort(sources_.edges.begin(), sources_.edges.end());
+  sources_.edges.erase(std::unique(sources_.edges.begin(), sources_.edges.end()), sources_.edges.end());
   sources_.index();
   bounds_ = m.bounds();
   radius_ = m.radius();
@@ -95,6 +116,7 @@ Shape::Shape(Sphere sphere, double density) : geometry_(sphere) {
     const Eigen::Vector3d u(s * std::cos(phi), s * std::sin(phi), z);
     add_source(sources_, r * u, -u);
   }
+  sources_.sphere_radius = float(r);
   sources_.index();
   bounds_ = {Eigen::Vector3d::Constant(-r), Eigen::Vector3d::Constant(r)};
   radius_ = r;
@@ -109,6 +131,10 @@ Shape::Shape(Box box, double density) : geometry_(box) {
     const Eigen::Vector3d sign(i & 1 ? 1 : -1, i & 2 ? 1 : -1, i & 4 ? 1 : -1);
     add_source(sources_, sign.cwiseProduct(h), -sign);
   }
+  // Corners i and i ^ bit differ along one axis: the 12 edges.
+  for (uint32_t i = 0; i < 8; ++i)
+    for (uint32_t bit : {1u, 2u, 4u})
+      if ((i & bit) == 0) sources_.edges.push_back({i, i | bit});
   if (density > 0) {
     for (int axis = 0; axis < 3; ++axis) {
       const int u = (axis + 1) % 3, v = (axis + 2) % 3;

@@ -85,6 +85,22 @@ struct ShapeEntry {
     n[face / 2] = face % 2 == 0 ? 1.0 : -1.0;
     return n;
   }
+
+  // The point of face `face` nearest to p (this shape's frame), in double:
+  // an edge contact's way out. Mesh: the triangle's closest point; box: p
+  // moved onto the face's plane; sphere: p pushed out along its radius.
+  Eigen::Vector3d nearest_on_face(int32_t face, const Eigen::Vector3d& p) const {
+    if (const Mesh* m = shape->mesh()) {
+      const auto& tri = m->triangles()[size_t(face)];
+      return closest_on_triangle(p, m->positions()[tri[0]].cast<double>(), m->positions()[tri[1]].cast<double>(),
+                                 m->positions()[tri[2]].cast<double>());
+    }
+    if (const auto* sphere = std::get_if<Sphere>(&shape->geometry()))
+      return p.isZero() ? Eigen::Vector3d(0, 0, sphere->radius) : Eigen::Vector3d(p.normalized() * sphere->radius);
+    Eigen::Vector3d q = p;
+    q[face / 2] = (face % 2 == 0 ? 1.0 : -1.0) * std::get<Box>(shape->geometry()).half_extents[face / 2];
+    return q;
+  }
 };
 
 class PipelineNarrowPhase final : public NarrowPhase {
@@ -165,6 +181,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive) const;
+  void fill_edge(const RayJob& job, const RayOutcome& o, BodyId source, BodyId target, Side side, Contact& c) const;
 
   std::string name_;
   std::vector<std::string> devices_;
@@ -402,6 +419,10 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
   const Eigen::Matrix3d target_rotation = dst.pose.orientation.toRotationMatrix();
   for (const RayOutcome& o : outcomes) {
     if (o.kind == RTCD_RAY_WATCHED) continue;
+    if (o.edge) {
+      fill_edge(job, o, source_id, target_id, side, *contacts++);
+      continue;
+    }
     const Eigen::Vector3d origin = source.shape->sources().origins[o.vertex].cast<double>();
     const Eigen::Vector3d& direction = source.directions[o.vertex];
     // In the target's frame: keep the executor's decision, sharpen the distance.
@@ -416,6 +437,10 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
     r.target_body = target_id;
     r.vertex = o.vertex;
     r.triangle = o.triangle;
+    if (penetrating) {
+      contacts->kind = ContactKind::vertex;
+      contacts->edge = {o.vertex, o.vertex};
+    }
     r.origin = source_rotation * origin + src.pose.position;
     // Rotations of unit vectors: unit to double precision.
     r.direction = source_rotation * direction;
@@ -432,6 +457,52 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
 }
 
 }  // namespace
+
+// An edge contact (kernel/trace.h, rtcd_edge_trace: the point at fraction
+// t of the edge) or a sphere's deepest point (rtcd_sphere_trace), and the
+// way out to the nearest point of the face the executor chose, measured in
+// double.
+void PipelineNarrowPhase::fill_edge(const RayJob& job, const RayOutcome& o, BodyId source_id, BodyId target_id,
+                                    Side side, Contact& c) const {
+  const Body& src = bodies_[source_id];
+  const Body& dst = bodies_[target_id];
+  const ShapeEntry& source = shapes_[src.shape];
+  const ShapeEntry& target = shapes_[dst.shape];
+  const RaySources& rs = source.shape->sources();
+  Eigen::Vector3d p;  // in the target's frame
+  if (o.edge == RTCD_ITEM_SPHERE) {
+    // From the centre toward the target's centre (sphere) or its nearest point (box).
+    const Eigen::Vector3d& centre = job.translation;
+    Eigen::Vector3d toward = -centre;
+    if (const auto* box = std::get_if<Box>(&target.shape->geometry()))
+      toward = centre.cwiseMax(-box->half_extents).cwiseMin(box->half_extents) - centre;
+    p = centre + toward.normalized() * std::get<Sphere>(source.shape->geometry()).radius;
+    c.kind = ContactKind::sphere;
+    c.vertex = 0;
+    c.edge = {0, 0};
+  } else {
+    const auto& e = rs.edges[o.vertex - rs.first_edge()];
+    const Eigen::Vector3d p0 = rs.origins[e[0]].cast<double>(), p1 = rs.origins[e[1]].cast<double>();
+    p = job.rotation * (p0 + double(o.t) * (p1 - p0)) + job.translation;
+    c.kind = ContactKind::edge;
+    c.vertex = e[0];
+    c.edge = e;
+  }
+  const Eigen::Vector3d out = target.nearest_on_face(o.triangle, p) - p;
+  const Eigen::Matrix3d target_rotation = dst.pose.orientation.toRotationMatrix();
+  const Eigen::Vector3d normal = target.exit_normal(o.triangle, p + out);
+  c.source = side;
+  c.source_body = source_id;
+  c.target_body = target_id;
+  c.triangle = o.triangle;
+  c.origin = dst.pose.orientation * p + dst.pose.position;
+  c.depth = out.norm();
+  // On the surface already (touching): out along the face's normal.
+  c.direction = target_rotation * (c.depth > 0.0 ? Eigen::Vector3d(out / c.depth) : normal);
+  c.normal = target_rotation * normal;
+  c.projected_depth = c.depth * std::abs(c.direction.dot(c.normal));
+  c.push = config_.projected ? Eigen::Vector3d(c.normal * c.projected_depth) : Eigen::Vector3d(c.direction * c.depth);
+}
 
 RayTally& RayTally::operator+=(const RayTally& o) {
   RayCounts::operator+=(o);

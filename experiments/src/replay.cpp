@@ -175,7 +175,7 @@ void count_judged(const Verdict& v, const StepResult& r, ReplayStep& out) {
       if (!v.closed[i][side]) continue;
       hit.clear();
       for (const Contact& c : r.contacts_of(r.pairs[i]))
-        if (int(c.source) == side) hit.push_back(c.vertex);
+        if (int(c.source) == side && c.kind == ContactKind::vertex) hit.push_back(c.vertex);
       const auto& allowed = v.not_outside[i][side];
       for (uint32_t vertex : hit) out.false_rays += !std::binary_search(allowed.begin(), allowed.end(), vertex);
       const auto& deep = v.deep[i][side];

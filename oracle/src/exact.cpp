@@ -149,6 +149,33 @@ struct ExactShape::Tree {
     }
   }
 
+  // Every crossing of o + t * d with 0 <= t <= 1: (t, +1 entering or -1
+  // leaving), unordered.
+  void crossings(const Vec& o, const Vec& d, std::vector<std::pair<double, int>>& out) const {
+    const Vec inv_d = d.cwiseInverse();
+    int32_t stack[128];
+    int top = 0;
+    stack[top++] = 0;
+    while (top > 0) {
+      const Node& n = nodes[stack[--top]];
+      double t0, t1;
+      slab(n.box, o, inv_d, t0, t1);
+      if (t0 > t1 || t1 < 0.0 || t0 > 1.0) continue;
+      if (n.left >= 0) {
+        stack[top++] = n.left;
+        stack[top++] = n.right;
+        continue;
+      }
+      for (uint32_t i = n.first; i < n.first + n.count; ++i) {
+        const auto& tri = triangles[order[i]];
+        const double t = line_crossing(o, d, corner(tri, 0), corner(tri, 1), corner(tri, 2));
+        if (!(t >= 0.0 && t <= 1.0)) continue;
+        const double facing = (corner(tri, 1) - corner(tri, 0)).cross(corner(tri, 2) - corner(tri, 0)).dot(d);
+        if (facing != 0.0) out.push_back({t, facing < 0.0 ? 1 : -1});
+      }
+    }
+  }
+
   // Inside when the nearest crossing along d leaves the surface: for a
   // closed, consistently wound mesh the same verdict as the parity of all
   // crossings, found without visiting them all.
@@ -279,6 +306,55 @@ std::vector<ExactRay> ExactShape::rays_from(const Shape& source, const Pose& sou
       const Vec d = (rotation * rs.directions[i].cast<double>()).normalized();
       double t;
       if (first_hit(p, d, t, r.triangle)) r.depth = t;
+    }
+  }
+  return out;
+}
+
+std::vector<double> ExactShape::edge_depths(const Shape& source, const Pose& source_pose, const Pose& pose) const {
+  const Pose to_local = pose.inverse() * source_pose;
+  const Eigen::Matrix3d rotation = to_local.orientation.toRotationMatrix();
+  const RaySources& rs = source.sources();
+  const Aabb bounds = shape_->bounds();
+  std::vector<double> out(rs.edges.size(), -1.0);
+  if (!closed() || std::holds_alternative<HalfSpace>(shape_->geometry())) return out;
+  std::vector<std::pair<double, int>> hits;
+  for (size_t e = 0; e < rs.edges.size(); ++e) {
+    const Vec p0 = rotation * rs.origins[rs.edges[e][0]].cast<double>() + to_local.position;
+    const Vec p1 = rotation * rs.origins[rs.edges[e][1]].cast<double>() + to_local.position;
+    const Vec d = p1 - p0;
+    Aabb segment;
+    segment.extend(p0);
+    segment.extend(p1);
+    if (d.isZero() || segment.intersection(bounds).empty() || inside(p0) || inside(p1)) continue;
+    hits.clear();
+    if (tree_) {
+      tree_->crossings(p0, d, hits);
+    } else {
+      // Sphere or box: the line's span inside, in closed form.
+      double t0 = kInf, t1 = -kInf;
+      if (const auto* s = std::get_if<Sphere>(&shape_->geometry())) {
+        const double a = d.squaredNorm(), b = p0.dot(d), c = p0.squaredNorm() - s->radius * s->radius;
+        const double disc = b * b - a * c;
+        if (disc > 0.0) {
+          t0 = (-b - std::sqrt(disc)) / a;
+          t1 = (-b + std::sqrt(disc)) / a;
+        }
+      } else {
+        const Vec& h = std::get<Box>(shape_->geometry()).half_extents;
+        slab(Box3(-h, h), p0, d.cwiseInverse(), t0, t1);
+      }
+      if (t0 < t1 && t0 > 0.0 && t1 < 1.0) hits = {{t0, 1}, {t1, -1}};
+    }
+    std::sort(hits.begin(), hits.end());
+    double enter = -1.0;
+    for (const auto& [t, sense] : hits) {
+      if (sense > 0) {
+        enter = t;
+      } else if (enter >= 0.0) {
+        if (t > enter) out[e] = std::max(out[e], distance(p0 + 0.5 * (enter + t) * d));
+        enter = -1.0;
+      }
     }
   }
   return out;

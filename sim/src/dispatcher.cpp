@@ -163,10 +163,12 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
     const double depth = c.push.norm();
     if (!(depth > 0)) continue;
     const Eigen::Vector3d out = c.push / depth;  // moves the source vertex out of the target
+    const int i0 = c.kind == ContactKind::sphere ? -2 : int(c.edge[0]);
+    const int i1 = c.kind == ContactKind::vertex ? -1 : c.kind == ContactKind::edge ? int(c.edge[1]) : -2;
     if (c.source == Side::a)
-      touching_.push_back({c.origin, c.origin + c.push, out, -depth, 0, c.vertex});
+      touching_.push_back({c.origin, c.origin + c.push, out, -depth, 0, i0, i1});
     else
-      touching_.push_back({c.origin + c.push, c.origin, -out, -depth, 1, c.vertex});
+      touching_.push_back({c.origin + c.push, c.origin, -out, -depth, 1, i0, i1});
   }
   if (options_.speculative) {
     for (const PredictiveRay& r : result_.predictive_of(pair)) {
@@ -175,9 +177,9 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
       const double gap = r.distance * std::abs(r.direction.dot(r.normal));
       const Eigen::Vector3d on_target = r.origin - gap * r.normal;
       if (r.source == Side::a)
-        gaps_.push_back({r.origin, on_target, r.normal, gap, 0, r.vertex});
+        gaps_.push_back({r.origin, on_target, r.normal, gap, 0, int(r.vertex), -1});
       else
-        gaps_.push_back({on_target, r.origin, -r.normal, gap, 1, r.vertex});
+        gaps_.push_back({on_target, r.origin, -r.normal, gap, 1, int(r.vertex), -1});
     }
   }
   choose_spread(touching_, options_.points_per_pair, chosen_touching_);
@@ -223,9 +225,10 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
     batch_.restitution_points += pt.m_combinedRestitution > 0;
     batch_.speculative_points += c.distance > 0;
     pt.m_partId0 = c.side;
-    pt.m_index0 = int(c.vertex);
+    pt.m_index0 = c.index0;
+    pt.m_index1 = c.index1;
     for (const btManifoldPoint& old : previous_) {
-      if (old.m_partId0 == c.side && old.m_index0 == int(c.vertex)) {
+      if (old.m_partId0 == c.side && old.m_index0 == c.index0 && old.m_index1 == c.index1) {
         pt.m_appliedImpulse = old.m_appliedImpulse;
         pt.m_appliedImpulseLateral1 = old.m_appliedImpulseLateral1;
         pt.m_appliedImpulseLateral2 = old.m_appliedImpulseLateral2;

@@ -318,6 +318,7 @@ Scene parse_scene(std::string_view json_text, const std::string& path, const Sce
   s.narrow.predictive = s.has(Effect::predictive);
   s.narrow.projected = s.has(Effect::projected);
   s.narrow.verify_walks = np.boolean("verify_walks", s.narrow.verify_walks);
+  s.narrow.edge_contacts = np.boolean("edge_contacts", s.narrow.edge_contacts);
   s.points_per_pair = uint32_t(np.integer("points_per_pair", s.points_per_pair, 1, 64));
   np.finish();
 

@@ -37,9 +37,21 @@ std::shared_ptr<const Shape> box_volume(double h) { return std::make_shared<Shap
 
 // Cube A (half 0.5) at the origin, cube B (half 0.6) at (1, 0, 0): exactly
 // A's four +x vertices penetrate, along -(1, ±1, ±1)/√3, to B's face x = 0.4.
+// A box mesh B's face x = 0.4 has a diagonal edge, which crosses A with
+// neither end inside: an edge contact 0.1 deep at its middle, out through
+// A's face x = 0.5.
 void expect_cube_contacts(const StepResult& r, const Eigen::Vector3d& a_position = Eigen::Vector3d::Zero()) {
-  ASSERT_EQ(r.contacts.size(), 4u);
+  size_t vertex_contacts = 0;
   for (const Contact& c : r.contacts) {
+    if (c.kind == ContactKind::edge) {
+      EXPECT_EQ(c.source, Side::b);
+      EXPECT_NEAR((c.origin - a_position - Eigen::Vector3d(0.4, 0, 0)).norm(), 0.0, 1e-6);
+      EXPECT_NEAR(c.depth, 0.1, 1e-6);
+      EXPECT_NEAR((c.push - Eigen::Vector3d(0.1, 0, 0)).norm(), 0.0, 1e-6);
+      continue;
+    }
+    ASSERT_EQ(c.kind, ContactKind::vertex);
+    ++vertex_contacts;
     EXPECT_EQ(c.source, Side::a);
     const Eigen::Vector3d local = c.origin - a_position;
     EXPECT_NEAR(local.x(), 0.5, 1e-7);
@@ -51,6 +63,8 @@ void expect_cube_contacts(const StepResult& r, const Eigen::Vector3d& a_position
     EXPECT_NEAR((c.normal - Eigen::Vector3d(-1, 0, 0)).norm(), 0.0, 1e-6);
     EXPECT_NEAR((c.push - Eigen::Vector3d(-0.1, 0, 0)).norm(), 0.0, 1e-6);
   }
+  EXPECT_EQ(vertex_contacts, 4u);
+  EXPECT_LE(r.contacts.size(), 5u);
   ASSERT_EQ(r.pairs.size(), 1u);
   EXPECT_TRUE(r.pairs[0].colliding);
   EXPECT_NEAR(r.pairs[0].max_depth, 0.1 * std::sqrt(3.0), 1e-6);
@@ -88,16 +102,36 @@ TEST_P(Conformance, SphereAgainstBox) {
     size_t expected = 0;
     for (const auto& o : sphere->sources().origins) expected += o.x() > 0.4f;
     ASSERT_GT(expected, 0u);
-    size_t from_sphere = 0;
+    size_t from_sphere = 0, deepest = 0;
     for (const Contact& c : res.contacts) {
-      if (c.source != Side::a) continue;
+      if (c.source != Side::a) {
+        // A box mesh's face x = 0.4 has a diagonal through the sphere: an
+        // edge contact at its middle (0.4, 0, 0), 0.1 inside.
+        EXPECT_EQ(c.kind, ContactKind::edge);
+        EXPECT_NEAR((c.origin - Eigen::Vector3d(0.4, 0, 0)).norm(), 0.0, 1e-6);
+        EXPECT_NEAR((c.push - Eigen::Vector3d(0.1, 0, 0)).norm(), 0.0, 1e-6);
+        continue;
+      }
+      if (c.kind == ContactKind::sphere) {
+        // The closed-form test: the sphere's point nearest the box, 0.1 deep.
+        ++deepest;
+        EXPECT_NEAR((c.origin - Eigen::Vector3d(0.5, 0, 0)).norm(), 0.0, 1e-6);
+        EXPECT_NEAR(c.depth, 0.1, 1e-6);
+        EXPECT_NEAR((c.push - Eigen::Vector3d(-0.1, 0, 0)).norm(), 0.0, 1e-6);
+        continue;
+      }
       ++from_sphere;
       const Eigen::Vector3d u = c.origin / 0.5;
       EXPECT_NEAR(c.depth, (c.origin.x() - 0.4) / u.x(), 1e-5);
       EXPECT_NEAR((c.normal - Eigen::Vector3d(-1, 0, 0)).norm(), 0.0, 1e-6);
     }
     EXPECT_EQ(from_sphere, expected);
-    for (const Contact& c : res.contacts) EXPECT_EQ(c.source, Side::a) << "box corners lie outside the sphere";
+    EXPECT_EQ(deepest, box->mesh() ? 0u : 1u) << "the closed form runs against volumes only";
+    for (const Contact& c : res.contacts) {
+      if (c.kind == ContactKind::vertex) {
+        EXPECT_EQ(c.source, Side::a) << "box corners lie outside the sphere";
+      }
+    }
   }
 }
 
@@ -266,8 +300,10 @@ TEST_P(Conformance, PredictiveRaysCatchNewContactsInIterativeSteps) {
     const StepResult s1 = r.step(Pose{}, at(1.09, 0, 0));
     ASSERT_EQ(s1.pairs[0].mode, PairMode::iterative);
     if (predictive) {
-      ASSERT_EQ(s1.contacts.size(), 4u);
+      // A's four corners, and B's face diagonal: watched, so tested again.
+      ASSERT_EQ(s1.contacts.size(), 5u);
       for (const Contact& k : s1.contacts) EXPECT_NEAR(k.projected_depth, 0.01, 1e-6);
+      EXPECT_EQ(s1.contacts.back().kind, ContactKind::edge);
     } else {
       EXPECT_EQ(s1.contacts.size(), 0u) << "without predictive rays the contact is delayed";
     }
@@ -410,6 +446,11 @@ TEST_P(Conformance, StatisticsAddUp) {
       EXPECT_EQ(contacts, r.contacts.size());
       EXPECT_EQ(predictive, r.predictive.size());
       EXPECT_EQ(s.candidates, s.rays_full + s.rays_iterative);
+      EXPECT_GE(s.edge_rays, s.edges_tested);
+      EXPECT_LE(s.edge_contacts, s.edges_tested);
+      size_t edge_contacts = 0;
+      for (const Contact& c : r.contacts) edge_contacts += c.kind == ContactKind::edge;
+      EXPECT_EQ(edge_contacts, s.edge_contacts);
       size_t endings = 0;
       for (size_t e : s.walk_endings) endings += e;
       EXPECT_EQ(endings, s.rays_iterative);
@@ -419,7 +460,7 @@ TEST_P(Conformance, StatisticsAddUp) {
         EXPECT_GT(s.rays_full, 2 * (r.contacts.size() + r.predictive.size()));
       } else if (step == 0) {
         EXPECT_EQ(s.rays_iterative, 0u);
-        EXPECT_GE(s.rays_full, r.contacts.size() + r.predictive.size() + s.rays_watched);
+        EXPECT_GE(s.rays_full + s.edges_tested, r.contacts.size() + r.predictive.size() + s.rays_watched);
       } else {
         EXPECT_EQ(s.rays_full, 0u);
         EXPECT_GT(s.rays_iterative, 0u);

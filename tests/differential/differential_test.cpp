@@ -84,7 +84,14 @@ TEST_P(Differential, BoundsHold) {
   EXPECT_LE(s.colliding_fraction(), 0.8);
   EXPECT_GT(s.depth_checked, 0u);
 
+  // Every pair that interpenetrates beyond epsilon, by a deep origin or an
+  // edge crossing no origin sees, is reported; none that does not.
+  EXPECT_EQ(s.false_pairs, 0u);
+  report_first(family, r, o, [](const PairMetrics& m) { return m.colliding_ours && m.inside_any == 0 && m.crossing_any == 0; },
+               "false pair");
   if (c.mode == RunMode::full) {
+    EXPECT_EQ(s.missed_pairs, 0u) << "of " << s.colliding << " colliding pairs";
+    report_first(family, r, o, [](const PairMetrics& m) { return m.colliding_exact && !m.colliding_ours; }, "missed pair");
     EXPECT_EQ(s.missed, 0u) << "of " << s.deep << " deep origins";
     report_first(family, r, o, [](const PairMetrics& m) { return m.missed > 0; }, "missed ray");
     EXPECT_EQ(s.false_rays, 0u) << "of " << s.far_outside << " origins outside";
@@ -96,6 +103,7 @@ TEST_P(Differential, BoundsHold) {
     // tracing before the judged step (the price, reported as the full-step
     // rate); most judged steps still walk, so the bounds below judge walks.
     EXPECT_GE(s.iterative_pairs, s.pairs / 2) << "most judged steps must walk";
+    EXPECT_LE(s.missed_pair_rate(), 0.005) << s.missed_pairs << " of " << s.colliding << " colliding pairs missed";
     EXPECT_LE(s.missed_rate(), 0.005) << s.missed << " of " << s.deep << " deep origins missed";
     // A walked contact is checked for a fold between its entry and exit
     // faces (verify_walks), so a vertex in a concave target's fold is not
@@ -110,6 +118,10 @@ TEST_P(Differential, BoundsHold) {
     EXPECT_EQ(s.fcl_agree, s.fcl_checked);
     report_first(family, r, o, [](const PairMetrics& m) { return m.colliding_exact && !m.contained && !m.fcl; },
                  "FCL calls separated a pair with a deep vertex");
+    // No pair FCL and the exact reference call colliding is set aside.
+    EXPECT_EQ(s.fcl_missed_pairs, 0u);
+    report_first(family, r, o, [](const PairMetrics& m) { return m.fcl && m.colliding_exact && !m.colliding_ours; },
+                 "FCL calls colliding a pair we call separate");
   }
 }
 

@@ -33,6 +33,11 @@ int rtcd_tracer_leaves(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 direct
 int rtcd_tracer_fold_free(const rtcd_tracer* t, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward, float reach) {
   return rtcd_fold_free(face, origin, toward, reach, t->positions, t->fold_faces, t->ring_first, t->ring);
 }
+float rtcd_tracer_distance2(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 point) {
+  return rtcd_point_triangle_distance2(point, t->positions[t->triangles[3 * triangle]],
+                                       t->positions[t->triangles[3 * triangle + 1]],
+                                       t->positions[t->triangles[3 * triangle + 2]]);
+}
 #include "rtcd/kernel/trace.h"
 
 __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
@@ -64,6 +69,10 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   p.max_walk_steps = 8u;
   p.predictive = p.watch = 1;
   p.iterative = 0;
+  p.verify = 1;
+  p.first_edge = 1u;
+  p.edges = 1;
+  p.source_radius = 0.0f;
   c.vertex = 0u;
   c.start = c.entry = 0;
   c.job = 0u;
@@ -73,6 +82,9 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   rtcd_full_trace(&t, &p, &c, 1, &o);
   rtcd_walk_trace(&t, &p, &c, &o);
   rtcd_volume_trace(RTCD_TARGET_BOX, 1.0f, ray.origin, &p, &c, &o);
+  rtcd_edge_trace(&t, &p, &c, &o);
+  rtcd_edge_volume_trace(RTCD_TARGET_SPHERE, 1.0f, ray.origin, &p, &c, &o);
+  rtcd_sphere_trace(RTCD_TARGET_BOX, 1.0f, ray.origin, &p, &c, &o);
 #ifdef RTCD_HAS_DOUBLE
   {
     rtcd_frame f;
@@ -80,6 +92,7 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
     for (k = 0; k < 9; ++k) f.rotation[k] = k % 4 == 0 ? 1.0 : 0.0;
     for (k = 0; k < 3; ++k) f.translation[k] = f.lo[k] = f.hi[k] = 0.0;
     kind += rtcd_place_ray(&f, ray.origin, ray.direction, &c.origin, &c.direction);
+    kind += rtcd_place_item(&f, &p, 1u, ray.origin, ray.direction, &c.origin, &c.direction);
   }
 #endif
   out[get_global_id(0)] = w.t + s.t + b.t + d2 + (float)kind + h.t + (float)near + o.t;

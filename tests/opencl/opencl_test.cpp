@@ -27,7 +27,7 @@ using validation::Family;
 
 // The device did the work, not the CPU fallback (whose answers are the same
 // by design, so equal output alone cannot tell): no step fell back, every
-// candidate ray ran on a device, and each of the `devices` ran some.
+// candidate ray and edge ran on a device, and each of the `devices` ran some.
 void expect_ran_on_devices(const std::vector<StepResult>& run, size_t devices) {
   std::vector<size_t> rays(devices, 0);
   for (size_t s = 0; s < run.size(); ++s) {
@@ -39,13 +39,14 @@ void expect_ran_on_devices(const std::vector<StepResult>& run, size_t devices) {
       rays[d] += stats.devices[d].rays;
       sum += stats.devices[d].rays;
     }
-    EXPECT_EQ(sum, stats.candidates) << "step " << s << ": rays the devices did not run";
+    EXPECT_EQ(sum, stats.candidates + stats.edges_tested) << "step " << s << ": rays the devices did not run";
     EXPECT_GT(stats.bytes_from_device, 0u) << "step " << s;
   }
   for (size_t d = 0; d < devices; ++d) EXPECT_GT(rays[d], 0u) << "device " << d << " ran no ray";
   // The first step has no pair state: its jobs are spread over every device.
-  if (!run.empty())
+  if (!run.empty()) {
     for (size_t d = 0; d < devices; ++d) EXPECT_GT(run[0].stats.devices[d].jobs, 0u) << "device " << d;
+  }
 }
 
 std::string mode_name(Mode m) { return m == Mode::automatic ? "auto" : to_string(m); }

@@ -19,12 +19,16 @@ using Eigen::Quaterniond;
 using Eigen::Vector3d;
 using Eigen::Vector3f;
 
-// (source, vertex) → depth: what a contact set says, ids aside.
+// (source, vertex) → depth: what a contact set's vertex rays say, ids
+// aside. (An edge contact's point is the middle of its crossing, computed
+// from the lower-numbered end: renumbering moves it by a rounding. The
+// differential tests judge edge crossings pair by pair.)
 using Depths = std::map<std::pair<int, uint32_t>, double>;
 
 Depths depths(const StepResult& r) {
   Depths d;
-  for (const Contact& c : r.contacts) d[{int(c.source), c.vertex}] = c.depth;
+  for (const Contact& c : r.contacts)
+    if (c.kind == ContactKind::vertex) d[{int(c.source), c.vertex}] = c.depth;
   return d;
 }
 

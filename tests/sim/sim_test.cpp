@@ -102,6 +102,58 @@ TEST(Sim, ConcaveBodyFallsOnAnotherAndRests) {
   }
 }
 
+// Two planks dropped crosswise: no corner of either is ever inside the
+// other, only edges cross, so without edge contacts the upper one falls
+// through the lower one to the ground; with them it rests on it.
+TEST(Sim, PlanksDroppedCrosswiseRestOneOnTheOther) {
+  const auto upper_height = [](bool edges) {
+    Simulation s(scene_from(std::string(R"({
+      "time_step": 0.004166666666666667, "steps": 600,
+      "effects": ["gravity", "contacts", "friction", "predictive", "projected"],
+      "narrow_phase": {"edge_contacts": )") + (edges ? "true" : "false") + R"(},
+      "bodies": [
+        {"name": "lower", "box": [1.0, 0.1, 0.05], "mass": 2, "pose": {"position": [0, 0, 0.05]}},
+        {"name": "upper", "box": [0.1, 1.0, 0.05], "mass": 2, "pose": {"position": [0, 0, 0.3]}}
+      ]
+    })"));
+    for (int i = 0; i < 600; ++i) s.step();
+    const auto bodies = s.bodies();
+    if (edges) {
+      EXPECT_LT(bodies[1].linear_velocity.norm(), 1e-2);
+      EXPECT_LT(s.last().deepest, 0.005);
+    }
+    return bodies[1].pose.position.z();
+  };
+  EXPECT_NEAR(upper_height(true), 0.15, 0.005) << "resting on the lower plank's top (0.1) by its half thickness";
+  EXPECT_LT(upper_height(false), 0.1) << "without edge contacts the planks pass through each other";
+}
+
+// A ring dropped over a fixed peg hangs on it: the peg's edges cross the
+// ring's tube, so the ring's wall never passes through the peg.
+TEST(Sim, RingOnAPegStaysLinked) {
+  // torus.obj scaled by 0.3: radius 0.3, tube 0.105, hole 0.195. Its axis
+  // along x, the peg's; the peg's top at 1.04.
+  Simulation s(scene_from(R"({
+    "time_step": 0.004166666666666667, "steps": 720,
+    "effects": ["gravity", "contacts", "friction", "predictive", "projected"],
+    "bodies": [
+      {"name": "peg", "box": [1.0, 0.04, 0.04], "static": true, "pose": {"position": [0, 0, 1.0]}},
+      {"name": "ring", "mesh": "../meshes/torus.obj", "scale": 0.3, "mass": 1,
+       "pose": {"position": [0, 0, 1.0], "orientation": [0.7071067811865476, 0, 0.7071067811865476, 0]}}
+    ]
+  })"));
+  for (int i = 0; i < 720; ++i) {
+    s.step();
+    const Eigen::Vector3d c = s.bodies()[1].pose.position;
+    // The peg stays in the hole: the ring's centre within the hole's
+    // radius less the peg's half width of the peg's axis.
+    ASSERT_LT(std::hypot(c.y(), c.z() - 1.0), 0.195 - 0.04 + 0.005) << "step " << i;
+  }
+  const auto ring = s.bodies()[1];
+  EXPECT_NEAR(ring.pose.position.z(), 1.04 - 0.195, 0.01) << "hanging by its hole's top on the peg's top";
+  EXPECT_LT(ring.linear_velocity.norm(), 2e-2);
+}
+
 // Predictive rays (thesis 2.1.3): a vertex about to penetrate is tracked, so
 // the penetration is found on the next narrow phase after it happens, not at
 // the pair's next full step. A box sinks at 0.01 per step into the ground;

@@ -61,14 +61,14 @@ TEST(Shape, SourceTreeReachesEveryOriginInABoxOnce) {
     for (int trial = 0; trial < 200; ++trial) {
       const Eigen::Vector3d c(at(rng), at(rng), at(rng));
       const rtcd::Aabb box = rtcd::Aabb{c, c}.grown(trial == 0 ? 10 * s.radius() : size(rng));
-      std::vector<int> found(rs.origins.size(), 0);
+      std::vector<int> found(rs.item_count(), 0);
       rs.visit_leaves(
           [&](const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
             return (hi.cast<double>().array() >= box.min.array()).all() &&
                    (lo.cast<double>().array() <= box.max.array()).all();
           },
           [&](uint32_t n) {
-            for (uint32_t v : rs.origins_of(n)) ++found[v];
+            for (uint32_t v : rs.items_of(n)) ++found[v];
           });
       for (size_t v = 0; v < rs.origins.size(); ++v) {
         ASSERT_LE(found[v], 1) << "origin " << v << ", trial " << trial;

@@ -126,7 +126,8 @@ RunResult run_family(const Family& family, const RunOptions& options) {
       }
       if (k + 1 == options.motion_steps) {
         for (size_t i = 0; i < options.pairs; ++i) {
-          for (const Contact& c : step.contacts_of(step.pairs[i])) tracked[i].push_back({c.source, c.vertex});
+          for (const Contact& c : step.contacts_of(step.pairs[i]))
+            if (c.kind == ContactKind::vertex) tracked[i].push_back({c.source, c.vertex});
           for (const PredictiveRay& p : step.predictive_of(step.pairs[i])) tracked[i].push_back({p.source, p.vertex});
         }
       }
@@ -168,7 +169,8 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     std::fill(ours_b.begin(), ours_b.end(), OurRay{});
     for (const auto& [side, vertex] : tracked[i]) (side == Side::a ? ours_a : ours_b)[vertex].tracked = true;
     for (const Contact& c : step.contacts_of(pr)) {
-      (c.source == Side::a ? ours_a : ours_b)[c.vertex].depth = c.depth;
+      // Edge contacts are judged by pair (crossing_deep), vertex rays one by one.
+      if (c.kind == ContactKind::vertex) (c.source == Side::a ? ours_a : ours_b)[c.vertex].depth = c.depth;
       m.our_projected_depth = std::max(m.our_projected_depth, c.projected_depth);
     }
 
@@ -178,7 +180,15 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     s.time_exact += seconds_since(t);
     judge(rays_ab, ours_a, exact_b.closed(), epsilon, m, depth_error_sum);
     judge(rays_ba, ours_b, exact_a.closed(), epsilon, m, depth_error_sum);
-    m.colliding_exact = m.deep > 0;
+    t = Clock::now();
+    for (const auto& depths : {exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),
+                               exact_a.edge_depths(*family.b, m.poses.b, m.poses.a)})
+      for (double depth : depths) {
+        m.crossing_deep += depth > epsilon;
+        m.crossing_any += depth > 0.0;
+      }
+    s.time_exact += seconds_since(t);
+    m.colliding_exact = m.deep > 0 || m.crossing_deep > 0;
 
     if (options.with_oracles) {
       t = Clock::now();
@@ -218,6 +228,9 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     s.max_relative_depth_error = std::max(s.max_relative_depth_error, m.max_relative_depth_error);
     if (m.deep) missed_rates.push_back(m.missed_rate());
     s.colliding += m.colliding_exact;
+    s.crossing_pairs += m.colliding_exact && m.deep == 0;
+    s.missed_pairs += m.colliding_exact && !m.colliding_ours;
+    s.false_pairs += m.colliding_ours && m.inside_any == 0 && m.crossing_any == 0;
     s.contained += m.contained && m.colliding_exact;
     if (options.with_oracles) {
       if (m.colliding_exact && !m.contained) {
@@ -227,7 +240,8 @@ RunResult run_family(const Family& family, const RunOptions& options) {
         s.gimpact_agree += m.has_gimpact && m.gimpact;
       }
       s.fcl_blind_contained += m.contained && m.colliding_exact && !m.fcl;
-      s.edge_edge += m.fcl && m.inside_any == 0;
+      s.fcl_missed_pairs += m.fcl && m.colliding_exact && !m.colliding_ours;
+      s.fcl_touching_pairs += m.fcl && !m.colliding_exact && !m.colliding_ours;
       if (m.has_ccd && m.ccd && m.colliding_ours) {
         ++s.ccd_pairs;
         ccd_difference_sum += std::abs(m.our_projected_depth - m.ccd_depth);
@@ -276,7 +290,12 @@ nlohmann::json to_json(const Summary& s) {
           {"depth_error", {{"max", s.max_depth_error}, {"mean", s.mean_depth_error}, {"max_relative", s.max_relative_depth_error}}},
           {"oracles", s.with_oracles},
           {"fcl", {{"checked", s.fcl_checked}, {"agreement", s.fcl_agreement()}, {"contained", s.contained},
-                   {"blind_contained", s.fcl_blind_contained}, {"edge_edge", s.edge_edge}, {"edge_edge_rate", s.edge_edge_rate()}}},
+                   {"blind_contained", s.fcl_blind_contained}, {"missed_pairs", s.fcl_missed_pairs},
+                   {"touching_pairs", s.fcl_touching_pairs}}},
+          {"missed_pairs", s.missed_pairs},
+          {"missed_pair_rate", s.missed_pair_rate()},
+          {"false_pairs", s.false_pairs},
+          {"crossing_pairs", s.crossing_pairs},
           {"gimpact", {{"pairs_run", s.gimpact_runs}, {"checked", s.gimpact_checked}, {"agreement", s.gimpact_agreement()}}},
           {"ccd", {{"pairs", s.ccd_pairs}, {"mean_abs_difference", s.ccd_mean_abs_difference}, {"mean_ratio", s.ccd_mean_ratio}}},
           {"seconds_per_pair", {{"ours", s.time_ours}, {"exact", s.time_exact}, {"fcl", s.time_fcl}, {"fcl_contacts", s.time_fcl_contacts},

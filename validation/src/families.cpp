@@ -37,7 +37,7 @@ std::shared_ptr<const Shape> mesh(Mesh m) { return std::make_shared<Shape>(std::
 }  // namespace
 
 const std::vector<std::string>& family_names() {
-  static const std::vector<std::string> names = {"convex", "concave", "torus", "plates", "highres", "primitives"};
+  static const std::vector<std::string> names = {"convex", "concave", "torus", "plates", "highres", "primitives", "bars", "rings"};
   return names;
 }
 
@@ -78,6 +78,20 @@ Family make_family(const std::string& name) {
     f.b = std::make_shared<Shape>(Sphere{1.0});
     f.convex = true;
     f.reach = 2.2;
+  } else if (name == "bars") {
+    // Thin bodies crossing at random: most overlaps have no vertex inside.
+    f.description = "bar mesh (1 x 0.08 x 0.08) vs plank mesh (1 x 0.2 x 0.04), crossing";
+    f.a = mesh(gen::box({0.5, 0.04, 0.04}));
+    f.b = mesh(gen::box({0.5, 0.1, 0.02}));
+    f.convex = true;
+    f.reach = 0.4;
+    f.thinnest = 0.04;
+  } else if (name == "rings") {
+    f.description = "ring (torus R 0.5, r 0.05, 768 triangles) vs peg mesh (0.08 x 0.08 x 1.2)";
+    f.a = mesh(gen::torus(0.5, 0.05, 48, 8));
+    f.b = mesh(gen::box({0.04, 0.04, 0.6}));
+    f.reach = 0.6;
+    f.thinnest = 0.08;
   } else {
     std::string list;
     for (const auto& n : family_names()) list += (list.empty() ? "" : ", ") + n;

@@ -57,6 +57,16 @@ struct Config {
   // an iterative step of concave blobs in steady contact.
   bool verify_walks = true;
 
+  // Test each edge of the source against the target too: two surfaces can
+  // cross with no ray origin inside either (planks laid crosswise). An edge
+  // whose ends are outside but whose line enters the target gives an edge
+  // contact (Contact::edge). Default on. Cost: the edges near a pair's
+  // overlap (about three per candidate vertex of a closed mesh) each cast
+  // one ray as long as the edge, a second when the first enters the target
+  // and two more and a nearest-triangle query for a crossing; in walking
+  // modes the edges near the target are tested again every step.
+  bool edge_contacts = true;
+
   // Push along the impacted triangle's normal by the projected depth
   // (section 2.2) rather than along the ray by its depth: what Contact::push
   // holds. Default on. Cost: none here; it changes what the solver receives.

@@ -25,7 +25,8 @@ class MeshTracer {
   // Nearest triangle met by origin + t * direction with 0 <= t <= t_max,
   // from either side; zero-area triangles are never hit.
   virtual TraceHit first_hit(const rtcd_ray& ray, float t_max) const = 0;
-  // A triangle nearest to `point` within `radius` (ties: any), or -1; zero-area
+  // A triangle nearest to `point` within `radius` (ties: the lowest id, the
+  // rule of kernel/tracer.h), or -1; zero-area
   // triangles are never returned.
   virtual int32_t nearest(const rtcd_vec3& point, float radius) const = 0;
 };
@@ -41,14 +42,14 @@ std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory
 // What every executor derives from a job the same way, for the per-ray code
 // of kernel/trace.h: the per-ray parameters, the transform and candidate box
 // for rtcd_place_ray.
-rtcd_trace_params make_trace_params(const RayJob& job, const Shape& target, const Config& config);
+rtcd_trace_params make_trace_params(const RayJob& job, const Shape& source, const Shape& target, const Config& config);
 rtcd_frame make_frame(const RayJob& job);
 
 // Calls visit_node(n) for each leaf sources.nodes[n] of the source's tree
 // whose box, placed in the target's frame as the box around it (in double,
-// grown well past rounding), meets the job's overlap box. Its origins are a
-// superset of the candidates rtcd_place_ray takes, found by whole boxes:
-// most of a body's origins lie far from the overlap and are turned away
+// grown well past rounding), meets the job's overlap box. Its items are a
+// superset of the candidates rtcd_place_item takes, found by whole boxes:
+// most of a body's items lie far from the overlap and are turned away
 // without being placed. Each leaf at most once, in no particular order.
 template <class VisitNode>
 void visit_near_leaves(const RayJob& job, const RaySources& sources, const VisitNode& visit_node) {
@@ -66,12 +67,12 @@ void visit_near_leaves(const RayJob& job, const RaySources& sources, const Visit
   sources.visit_leaves(may_hold, visit_node);
 }
 
-// Calls visit(v) for each origin of the leaves visit_near_leaves reaches:
-// each at most once, in no particular order.
+// Calls visit(item) for each item of the leaves visit_near_leaves reaches
+// (origins and edges): each at most once, in no particular order.
 template <class Visit>
-void visit_near_origins(const RayJob& job, const RaySources& sources, const Visit& visit) {
+void visit_near_items(const RayJob& job, const RaySources& sources, const Visit& visit) {
   visit_near_leaves(job, sources, [&](uint32_t n) {
-    for (uint32_t v : sources.origins_of(n)) visit(v);
+    for (uint32_t v : sources.items_of(n)) visit(v);
   });
 }
 

@@ -39,9 +39,24 @@ struct RayRecord {
   Eigen::Vector3d normal = Eigen::Vector3d::Zero();     // unit outward normal of the impacted triangle
 };
 
-// One penetrating ray: the vertex is inside the target; moving it by
-// direction * depth brings it to the target's surface.
+// What found a contact: a ray from a vertex inside the target, an edge of
+// the source that crosses the target with neither end inside, or a
+// sphere's deepest point inside a sphere or box target (closed form).
+enum class ContactKind : uint8_t { vertex, edge, sphere };
+const char* to_string(ContactKind kind);
+
+// One point of the source inside the target; moving it by direction * depth
+// brings it to the target's surface. Vertex contacts: the vertex `origin`
+// along its inward normal `direction`, out through `triangle`. Edge
+// contacts: the point `origin` of the edge `edge` halfway between where
+// its line enters the target from either end, `direction` toward the
+// nearest point of the target's surface, on `triangle` (see
+// docs/ARCHITECTURE.md, Edge contacts).
 struct Contact : RayRecord {
+  ContactKind kind = ContactKind::vertex;
+  // Edge contacts: the source's two vertex ids, the lower first (`vertex`
+  // holds the first); vertex contacts: {vertex, vertex}.
+  std::array<uint32_t, 2> edge{};
   double depth = 0.0;
   double projected_depth = 0.0;  // depth * |direction . normal| (section 2.2)
   // What to move the source vertex by to separate: normal * projected_depth
@@ -78,8 +93,11 @@ struct RayCounts {
   size_t walk_steps = 0;       // triangles located by all walks
   size_t nearest_queries = 0;  // nearest-triangle queries for vertices neither ray met
   size_t rays_retraced = 0;    // walked rays whose walks could not tell inside from outside, traced again
-  size_t rays_watched = 0;     // tracked rays that reported nothing (vertices near the target)
+  size_t rays_watched = 0;     // tracked rays that reported nothing (vertices and edges near the target)
   size_t fold_casts = 0;       // walked contacts whose fold check cast a ray (beyond their face's clearance)
+  size_t edges_tested = 0;     // edges tested for a crossing (Config::edge_contacts), in every mode
+  size_t edge_rays = 0;        // rays those tests cast
+  size_t edge_contacts = 0;    // edges that cross the target with neither end inside
   std::array<size_t, RTCD_LINE_STATUS_COUNT> walk_endings{};  // iterative rays by rtcd_line_status
 
   RayCounts& operator+=(const RayCounts& other);

@@ -3,6 +3,7 @@
 // sampling of the surface, so any surface can cast rays).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -32,14 +33,38 @@ struct Box {
 // counts.
 struct HalfSpace {};
 
-// Ray origins in the shape's local frame, each with its inward unit
-// direction, and a tree of boxes over them: a pair's overlap holds a few of
-// a body's origins, found without testing every one.
+// What a shape is the source of in a pair: ray origins in its local frame,
+// each with its inward unit direction, and edges between them (a surface
+// may cross another where no origin is inside it). Items number both:
+// origins first, then edges from first_edge(). A tree of boxes over the
+// items finds the few a pair's overlap holds without testing every one.
 struct RaySources {
   std::vector<Eigen::Vector3f> origins;
   std::vector<Eigen::Vector3f> directions;
+  // Each edge once, as two origin ids (the lower first), in that order.
+  std::vector<std::array<uint32_t, 2>> edges;
+  // A sphere: its radius, and one item after its origins (it has no
+  // edges): its deepest point toward a sphere or box target, tested in
+  // closed form (kernel/trace.h, rtcd_sphere_trace). 0 otherwise.
+  float sphere_radius = 0.0f;
 
-  // A balanced binary tree over a permutation of the origins: a node's are
+  uint32_t first_edge() const { return uint32_t(origins.size()); }
+  uint32_t item_count() const { return uint32_t(origins.size() + edges.size() + (sphere_radius > 0.0f)); }
+  // What the per-ray code places (kernel/tracer.h, rtcd_place_item): an
+  // origin and its direction, or an edge's first end and the vector to its
+  // other end.
+  Eigen::Vector3f item_origin(uint32_t item) const {
+    if (sphere_radius > 0.0f && item == first_edge()) return Eigen::Vector3f::Zero();
+    return item < first_edge() ? origins[item] : origins[edges[item - first_edge()][0]];
+  }
+  Eigen::Vector3f item_direction(uint32_t item) const {
+    if (item < first_edge()) return directions[item];
+    if (sphere_radius > 0.0f) return Eigen::Vector3f::Zero();
+    const auto& e = edges[item - first_edge()];
+    return origins[e[1]] - origins[e[0]];
+  }
+
+  // A balanced binary tree over a permutation of the items: a node's are
   // order[begin, end); an inner node's children are nodes[child] and
   // nodes[child + 1]; child 0 marks a leaf (the root is node 0).
   struct Node {
@@ -49,7 +74,7 @@ struct RaySources {
   std::vector<Node> nodes;
   std::vector<uint32_t> order;
 
-  // Builds the tree over the origins; called once they are all in.
+  // Builds the tree over the items; called once they are all in.
   void index();
   // Calls visit_leaf(n) for every leaf nodes[n] reached through nodes whose
   // box passes may_hold(lo, hi): a test that may pass a box holding no
@@ -57,8 +82,8 @@ struct RaySources {
   // in no particular order.
   template <class MayHold, class VisitLeaf>
   void visit_leaves(const MayHold& may_hold, const VisitLeaf& visit_leaf) const;
-  // The origins of node n.
-  std::span<const uint32_t> origins_of(uint32_t n) const {
+  // The items of node n.
+  std::span<const uint32_t> items_of(uint32_t n) const {
     return {order.data() + nodes[n].begin, nodes[n].end - nodes[n].begin};
   }
 };
@@ -86,11 +111,13 @@ class Shape {
  public:
   using Geometry = std::variant<Mesh, Sphere, Box, HalfSpace>;
 
-  // A mesh casts from its vertices along the inward vertex normal.
+  // A mesh casts from its vertices along the inward vertex normal; its edges
+  // are the triangles' (a zero-length one included: it is never a candidate).
   explicit Shape(Mesh mesh);
-  // A sphere casts from the vertices of a level-2 icosphere (162 origins),
-  // a box from its 8 corners along the corner diagonals; sampling_density > 0
-  // adds that many origins per unit area, spread evenly over the surface.
+  // A sphere casts from the vertices of a level-2 icosphere (162 origins)
+  // and has no edges; a box casts from its 8 corners along the corner
+  // diagonals, and its 12 edges join them; sampling_density > 0 adds that
+  // many origins per unit area, spread evenly over the surface.
   explicit Shape(Sphere sphere, double sampling_density = 0.0);
   explicit Shape(Box box, double sampling_density = 0.0);
   // Bounds: |x|, |y| <= kMaxCoordinate, -kMaxCoordinate <= z <= 0.

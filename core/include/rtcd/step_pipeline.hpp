@@ -69,10 +69,16 @@ struct RayTally : RayCounts {
   size_t contacts = 0, predictive = 0;
 
   void count(const RayOutcome& o, bool iterative) {
-    ++candidates;
     contacts += o.kind == RTCD_RAY_PENETRATING;
-    predictive += o.kind == RTCD_RAY_PREDICTIVE;
     rays_watched += o.kind == RTCD_RAY_WATCHED;
+    if (o.edge) {
+      ++edges_tested;
+      edge_rays += o.edge_rays;
+      edge_contacts += o.kind == RTCD_RAY_PENETRATING;
+      return;
+    }
+    ++candidates;
+    predictive += o.kind == RTCD_RAY_PREDICTIVE;
     rays_predictive += o.predictive_cast;
     nearest_queries += o.nearest_query;
     rays_retraced += o.retraced;
@@ -104,10 +110,11 @@ class RayExecutor {
   // Called before each step's batches: a residence is good for the step
   // after the one that wrote it.
   virtual void begin_step() {}
-  // Job j's candidates, in order — every origin with a direction inside
-  // the overlap box (full jobs, by vertex), or every tracked ray whose
-  // origin is inside it (iterative jobs, in tracked order) — each traced or
-  // walked to one outcome; a ray that reports nothing has kind
+  // Job j's candidates, in order — every source item the overlap box takes
+  // (rtcd_place_item: origins with a direction inside it, then edges that
+  // meet it; full jobs, by item), or every tracked item it takes (iterative
+  // jobs, in tracked order) — each traced, walked or (edges) tested to one
+  // outcome; a ray that reports nothing has kind
   // RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when it stays tracked (its
   // `triangle` is where the next walk starts). tallies[j] and outcomes[j]
   // receive what settle_outcomes makes of them. The caller sizes both to at

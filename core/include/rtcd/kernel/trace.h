@@ -11,12 +11,15 @@
  *     (direction . the triangle's unit normal > 0)
  *   int rtcd_tracer_fold_free(const rtcd_tracer*, rtcd_int face, rtcd_vec3 origin, rtcd_vec3 toward, float reach);
  *     (rtcd_fold_free of fold.h over the mesh's FoldGuard)
+ *   float rtcd_tracer_distance2(const rtcd_tracer*, rtcd_int triangle, rtcd_vec3 point);
+ *     (rtcd_point_triangle_distance2 of nearest.h)
  * The CPU executor backs it with a MeshTracer, the device with its own
  * brute-force or BVH traversal over buffers. */
 #ifndef RTCD_KERNEL_TRACE_H
 #define RTCD_KERNEL_TRACE_H
 
 #include "classify.h"
+#include "nearest.h"
 #include "tracer.h"
 #include "volumes.h"
 #include "walk.h"
@@ -155,6 +158,164 @@ RTCD_INLINE void rtcd_volume_trace(int target_kind, float radius, rtcd_vec3 half
                                        rtcd_inside_box(c->origin, p->watch_lo, p->watch_hi), p->extension);
   o->t = h.t;
   o->triangle = h.face;
+}
+
+/* Touching is not crossing: a contact point closer to the surface than
+ * this fraction of its edge's length (or of a sphere's radius), about 16
+ * float roundings of a coordinate, is on it. */
+#define RTCD_TOUCHING 1.0e-6f
+
+/* An edge that makes no contact stays watched, in walking modes, while its
+ * segment's box is within the watch reach of the target's box: it is
+ * tested again each step, so a crossing is found in the step it begins. */
+RTCD_INLINE void rtcd_watch_edge(const rtcd_trace_params* p, const rtcd_candidate* c, rtcd_outcome* o) {
+  rtcd_vec3 end = rtcd_add(c->origin, c->direction);
+  if (p->watch && !(c->origin.x > p->watch_hi.x && end.x > p->watch_hi.x) &&
+      !(c->origin.y > p->watch_hi.y && end.y > p->watch_hi.y) &&
+      !(c->origin.z > p->watch_hi.z && end.z > p->watch_hi.z) &&
+      !(c->origin.x < p->watch_lo.x && end.x < p->watch_lo.x) &&
+      !(c->origin.y < p->watch_lo.y && end.y < p->watch_lo.y) && !(c->origin.z < p->watch_lo.z && end.z < p->watch_lo.z))
+    o->kind = RTCD_RAY_WATCHED;
+}
+
+/* Whether the point origin + m * along lies inside the target: its line
+ * back toward the edge's first end leaves the target first. Sets *back to
+ * that first hit. */
+RTCD_INLINE int rtcd_edge_point_inside(const rtcd_tracer* tracer, const rtcd_candidate* c, float m, rtcd_hit* back,
+                                       rtcd_outcome* o) {
+  rtcd_vec3 point = rtcd_add(c->origin, rtcd_scale(c->direction, m));
+  rtcd_ray ray = rtcd_make_ray(point, rtcd_neg(c->direction));
+  *back = rtcd_tracer_first_hit(tracer, &ray, m);
+  ++o->edge_rays;
+  return back->triangle >= 0 && back->t > 0.0f && rtcd_tracer_leaves(tracer, back->triangle, rtcd_neg(c->direction));
+}
+
+/* One edge of the source against a mesh: a crossing with neither end
+ * inside (an end inside is its own ray's contact). The edge's line is
+ * traced from each end toward the other, no farther: both first hits must
+ * enter the target, at fractions a and b of the edge from its first end.
+ * The contact lies at m, the middle of [a, b], when that point is inside
+ * (a ray from it back toward the first end leaves the target first);
+ * otherwise the edge crosses the target in several pieces, and the middle
+ * of the first piece is tried the same way. Its face is the triangle
+ * nearest to that point (the host measures depth and direction to it in
+ * double); t is m. Deterministic: every decision is a first hit or a
+ * nearest triangle under the tie rules of tracer.h. */
+RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
+                                 rtcd_outcome* o) {
+  rtcd_vec3 end = rtcd_add(c->origin, c->direction);
+  rtcd_ray forward = rtcd_make_ray(c->origin, c->direction);
+  rtcd_ray backward = rtcd_make_ray(end, rtcd_neg(c->direction));
+  rtcd_hit first, last, back;
+  rtcd_vec3 point;
+  float a, b, m, length, tolerance;
+  o->edge = RTCD_ITEM_EDGE;
+  o->kind = RTCD_RAY_DROPPED;
+  first = rtcd_tracer_first_hit(tracer, &forward, 1.0f);
+  o->edge_rays = 1;
+  if (first.triangle < 0 || rtcd_tracer_leaves(tracer, first.triangle, c->direction)) {
+    rtcd_watch_edge(p, c, o);
+    return;
+  }
+  last = rtcd_tracer_first_hit(tracer, &backward, 1.0f);
+  o->edge_rays = 2;
+  if (last.triangle < 0 || rtcd_tracer_leaves(tracer, last.triangle, rtcd_neg(c->direction))) {
+    rtcd_watch_edge(p, c, o);
+    return;
+  }
+  a = first.t;
+  b = 1.0f - last.t;
+  m = 0.5f * (a + b);
+  if (!(a < b) || !rtcd_edge_point_inside(tracer, c, m, &back, o)) {
+    /* Touching (no span), or the middle lies in a gap between pieces: the
+     * first piece ends where the ray from the middle met the surface. */
+    if (!(a < b) || back.triangle < 0) {
+      rtcd_watch_edge(p, c, o);
+      return;
+    }
+    b = m - back.t;
+    m = 0.5f * (a + b);
+    if (!(a < b) || !rtcd_edge_point_inside(tracer, c, m, &back, o)) {
+      rtcd_watch_edge(p, c, o);
+      return;
+    }
+  }
+  /* The surface is within (m - a) of the point: its entry lies there. */
+  length = RTCD_SQRT(rtcd_dot(c->direction, c->direction));
+  point = rtcd_add(c->origin, rtcd_scale(c->direction, m));
+  o->triangle = rtcd_tracer_nearest(tracer, point, (b - a) * length);
+  if (o->triangle < 0) o->triangle = first.triangle;
+  tolerance = RTCD_TOUCHING * length;
+  if (!(rtcd_tracer_distance2(tracer, o->triangle, point) > tolerance * tolerance)) {
+    rtcd_watch_edge(p, c, o);
+    return;
+  }
+  o->kind = RTCD_RAY_PENETRATING;
+  o->t = m;
+}
+
+/* One edge of the source against a sphere or a box: the exact span of its
+ * line inside the volume, [a, b] in fractions of the edge; a crossing when
+ * both ends are outside and the span lies between them. The contact lies
+ * at the span's middle, its face the nearest (box: the face with the least
+ * room; sphere: 0). A half-space has no edge test: a body crossing its
+ * plane has a ray origin below it. */
+RTCD_INLINE void rtcd_edge_volume_trace(int target_kind, float radius, rtcd_vec3 half_extents,
+                                        const rtcd_trace_params* p, const rtcd_candidate* c, rtcd_outcome* o) {
+  float a = 0.0f, b = 0.0f, m;
+  rtcd_vec3 point;
+  o->edge = RTCD_ITEM_EDGE;
+  o->kind = RTCD_RAY_DROPPED;
+  if (target_kind == RTCD_TARGET_HALFSPACE) return;
+  if (!rtcd_volume_span(target_kind, radius, half_extents, c->origin, c->direction, &a, &b) || !(a > 0.0f) ||
+      !(b < 1.0f)) {
+    rtcd_watch_edge(p, c, o);
+    return;
+  }
+  m = 0.5f * (a + b);
+  point = rtcd_add(c->origin, rtcd_scale(c->direction, m));
+  if (!(rtcd_volume_room(target_kind, radius, half_extents, point) >
+        RTCD_TOUCHING * RTCD_SQRT(rtcd_dot(c->direction, c->direction)))) {
+    rtcd_watch_edge(p, c, o);
+    return;
+  }
+  o->kind = RTCD_RAY_PENETRATING;
+  o->t = m;
+  o->triangle = target_kind == RTCD_TARGET_BOX ? rtcd_box_nearest_face(point, half_extents) : 0;
+}
+
+/* A sphere source against a sphere or a box: the closed-form test that no
+ * sampling replaces (a cap can push into a face between its sample
+ * points). The sphere's deepest point toward the target (toward a sphere's
+ * centre; toward a box's nearest point to the centre) is a contact when it
+ * lies inside the target; its face is the nearest (sphere: 0). A centre
+ * inside the box is left to the sample points and the box's corners and
+ * edges, which then cross the sphere; the item stays watched in walking
+ * modes, so it is tested every step. */
+RTCD_INLINE void rtcd_sphere_trace(int target_kind, float radius, rtcd_vec3 half_extents, const rtcd_trace_params* p,
+                                   const rtcd_candidate* c, rtcd_outcome* o) {
+  rtcd_vec3 centre = c->origin, toward, point;
+  float d;
+  o->edge = RTCD_ITEM_SPHERE;
+  o->kind = p->watch ? RTCD_RAY_WATCHED : RTCD_RAY_DROPPED;
+  if (target_kind == RTCD_TARGET_SPHERE) {
+    toward = rtcd_neg(centre);
+  } else if (target_kind == RTCD_TARGET_BOX) {
+    rtcd_vec3 q = rtcd_v3(centre.x < -half_extents.x ? -half_extents.x : (centre.x > half_extents.x ? half_extents.x : centre.x),
+                          centre.y < -half_extents.y ? -half_extents.y : (centre.y > half_extents.y ? half_extents.y : centre.y),
+                          centre.z < -half_extents.z ? -half_extents.z : (centre.z > half_extents.z ? half_extents.z : centre.z));
+    toward = rtcd_sub(q, centre);
+  } else {
+    o->kind = RTCD_RAY_DROPPED;
+    return;
+  }
+  d = RTCD_SQRT(rtcd_dot(toward, toward));
+  if (!(d > 0.0f)) return;
+  point = rtcd_add(centre, rtcd_scale(toward, p->source_radius / d));
+  if (!(rtcd_volume_room(target_kind, radius, half_extents, point) > RTCD_TOUCHING * p->source_radius)) return;
+  o->kind = RTCD_RAY_PENETRATING;
+  o->t = 0.0f;
+  o->triangle = target_kind == RTCD_TARGET_BOX ? rtcd_box_nearest_face(point, half_extents) : 0;
 }
 
 #endif

@@ -18,9 +18,15 @@ typedef struct {
   float t;
 } rtcd_hit;
 
-/* A candidate ray in the target's frame, rounded to floats. */
+/* What a source item is (rtcd_outcome::edge). */
+#define RTCD_ITEM_ORIGIN 0
+#define RTCD_ITEM_EDGE 1
+#define RTCD_ITEM_SPHERE 2
+
+/* A candidate ray in the target's frame, rounded to floats. An edge item
+ * is a candidate too: origin is one end, direction runs to the other. */
 typedef struct {
-  rtcd_uint vertex;
+  rtcd_uint vertex; /* the source's item: a ray origin, or an edge from first_edge on */
   rtcd_int start; /* iterative: the exit walk's first triangle (-1: look up the nearest) */
   rtcd_int entry; /* iterative: the entry walk's first triangle (-1: unknown) */
   rtcd_uint job;  /* the job's index in its batch (device executors) */
@@ -41,6 +47,9 @@ typedef struct {
   rtcd_uchar nearest_query; /* a nearest-triangle query was made */
   rtcd_uchar retraced;      /* iterative: the walks could not be trusted (rtcd_walked_kind), traced again */
   rtcd_uchar fold_cast;     /* iterative: the fold check cast a ray (the contact lies beyond its face's clearance) */
+  rtcd_uchar edge;          /* RTCD_ITEM_EDGE: vertex is the edge's item, t the contact's place along it;
+                               RTCD_ITEM_SPHERE: a sphere's deepest point (rtcd_sphere_trace); 0: a ray origin */
+  rtcd_uchar edge_rays;     /* edge items: rays the crossing test cast */
 } rtcd_outcome;
 
 /* One job's parameters, the same for all of its rays. */
@@ -57,6 +66,9 @@ typedef struct {
   rtcd_int watch; /* vertices near the target are watched (predictive rays on, not Mode::full) */
   rtcd_int iterative;
   rtcd_int verify; /* walked contacts are checked for a fold between their entry and exit faces */
+  rtcd_uint first_edge; /* the source's items from here on are edges, or a sphere's one deepest-point item */
+  rtcd_int edges;       /* those items are candidates (Config::edge_contacts) */
+  float source_radius;  /* a sphere source: its radius; 0 otherwise */
 } rtcd_trace_params;
 
 RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
@@ -71,6 +83,8 @@ RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
   o->nearest_query = 0;
   o->retraced = 0;
   o->fold_cast = 0;
+  o->edge = RTCD_ITEM_ORIGIN;
+  o->edge_rays = 0;
 }
 
 RTCD_INLINE int rtcd_inside_box(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3 hi) {
@@ -116,6 +130,57 @@ RTCD_INLINE int rtcd_place_ray(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 
                            (float)(f->rotation[3] * dx + f->rotation[4] * dy + f->rotation[5] * dz),
                            (float)(f->rotation[6] * dx + f->rotation[7] * dy + f->rotation[8] * dz));
   return 1;
+}
+
+/* Places an edge item (origin: one end; along: to the other end) in the
+ * target's frame in double, like rtcd_place_ray; a candidate when the
+ * segment meets the candidate box (slabs in double). 0: not a candidate
+ * (zero length, or the segment misses the box). */
+RTCD_INLINE int rtcd_place_edge(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 along, rtcd_vec3* origin_out,
+                                rtcd_vec3* along_out) {
+  double p[3], d[3];
+  double s0 = 0.0, s1 = 1.0;
+  int k;
+  if (along.x == 0.0f && along.y == 0.0f && along.z == 0.0f) return 0;
+  for (k = 0; k < 3; ++k) {
+    p[k] = f->rotation[3 * k] * origin.x + f->rotation[3 * k + 1] * origin.y + f->rotation[3 * k + 2] * origin.z +
+           f->translation[k];
+    d[k] = f->rotation[3 * k] * along.x + f->rotation[3 * k + 1] * along.y + f->rotation[3 * k + 2] * along.z;
+  }
+  for (k = 0; k < 3; ++k) {
+    if (d[k] == 0.0) {
+      if (p[k] < f->lo[k] || p[k] > f->hi[k]) return 0;
+    } else {
+      double a = (f->lo[k] - p[k]) / d[k], b = (f->hi[k] - p[k]) / d[k];
+      if (a > b) {
+        double swap = a;
+        a = b;
+        b = swap;
+      }
+      if (a > s0) s0 = a;
+      if (b < s1) s1 = b;
+    }
+  }
+  if (s0 > s1) return 0;
+  *origin_out = rtcd_v3((float)p[0], (float)p[1], (float)p[2]);
+  *along_out = rtcd_v3((float)d[0], (float)d[1], (float)d[2]);
+  return 1;
+}
+
+/* A source item placed as what it is: a ray origin (rtcd_place_ray), an
+ * edge (rtcd_place_edge), or a sphere's centre (its deepest-point item,
+ * always a candidate of a job with candidates); the last two only when the
+ * job tests them. */
+RTCD_INLINE int rtcd_place_item(const rtcd_frame* f, const rtcd_trace_params* p, rtcd_uint item, rtcd_vec3 origin,
+                                rtcd_vec3 direction, rtcd_vec3* origin_out, rtcd_vec3* direction_out) {
+  if (item < p->first_edge) return rtcd_place_ray(f, origin, direction, origin_out, direction_out);
+  if (!p->edges) return 0;
+  if (p->source_radius > 0.0f) {
+    *origin_out = rtcd_v3((float)f->translation[0], (float)f->translation[1], (float)f->translation[2]);
+    *direction_out = rtcd_v3(0.0f, 0.0f, 0.0f);
+    return 1;
+  }
+  return rtcd_place_edge(f, origin, direction, origin_out, direction_out);
 }
 #endif
 

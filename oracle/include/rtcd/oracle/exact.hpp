@@ -59,6 +59,16 @@ class ExactShape {
   std::vector<ExactRay> rays_from(const Shape& source, const Pose& source_pose, const Pose& pose,
                                   double margin) const;
 
+  // Every edge of `source` (RaySources::edges, placed by source_pose)
+  // against this shape (placed by pose), for closed targets: -1 where an
+  // end is inside or the edge does not cross the surface; otherwise the
+  // greatest distance to the surface of the middles of the pieces of the
+  // edge inside the target (every crossing of the segment with the surface
+  // found, in order; a piece runs from an entering crossing to the next
+  // leaving one). A depth beyond the margin is a crossing no vertex ray
+  // sees. A half-space has none (an edge below its plane has an end below).
+  std::vector<double> edge_depths(const Shape& source, const Pose& source_pose, const Pose& pose) const;
+
  private:
   struct Tree;
   std::shared_ptr<const Shape> shape_;

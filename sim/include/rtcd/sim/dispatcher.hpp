@@ -75,7 +75,9 @@ class BatchDispatcher : public btCollisionDispatcher {
     Eigen::Vector3d on_a, on_b, normal_on_b;  // Bullet's convention: normal on B points toward A
     double distance;                           // < 0 penetrating, > 0 a speculative gap
     int side;
-    uint32_t vertex;
+    // Which point it is, for warm starting across steps: a vertex id and
+    // -1, an edge's two vertex ids, or -2 and -2 for a sphere's deepest point.
+    int index0, index1;
   };
   struct PairManifolds {
     std::vector<btPersistentManifold*> manifolds;

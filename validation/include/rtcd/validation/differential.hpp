@@ -57,7 +57,9 @@ struct PairMetrics {
   size_t depth_checked = 0;
   double max_depth_error = 0.0, max_relative_depth_error = 0.0;
   size_t inside_any = 0;   // origins inside at any depth, both directions
-  bool colliding_exact = false;  // some origin deeper than epsilon
+  size_t crossing_deep = 0;  // edges crossing the other body with neither end inside, deeper than epsilon
+  size_t crossing_any = 0;   // ... at any depth
+  bool colliding_exact = false;  // some origin or edge crossing deeper than epsilon
   bool colliding_ours = false;
   bool contained = false;  // every origin of one body inside the other
   bool fcl = false, has_gimpact = false, gimpact = false;
@@ -81,7 +83,15 @@ struct Summary {
   size_t colliding = 0;  // by the exact reference
   size_t fcl_checked = 0, fcl_agree = 0;  // pairs with a deep origin, one body not wholly inside the other
   size_t contained = 0, fcl_blind_contained = 0;  // wholly inside; of those FCL calls separated
-  size_t edge_edge = 0;  // FCL colliding with no origin of either body inside the other
+  // Pairs the exact reference calls colliding (an origin or an edge
+  // crossing deeper than epsilon) that rtcd calls separate; of those, the
+  // ones FCL calls colliding; pairs rtcd calls colliding with nothing of
+  // either body inside the other at any depth; pairs colliding only through
+  // edge crossings (no origin deeper than epsilon).
+  size_t missed_pairs = 0, fcl_missed_pairs = 0, false_pairs = 0, crossing_pairs = 0;
+  // Pairs FCL calls colliding and rtcd separate where the exact reference
+  // finds nothing deeper than epsilon (touching, within the tolerance).
+  size_t fcl_touching_pairs = 0;
   size_t gimpact_runs = 0, gimpact_checked = 0, gimpact_agree = 0;
   size_t ccd_pairs = 0;
   double ccd_mean_abs_difference = 0.0, ccd_mean_ratio = 0.0;  // our largest projected depth vs libccd's
@@ -93,7 +103,7 @@ struct Summary {
   double missed_rate() const { return deep ? double(missed) / double(deep) : 0.0; }
   double colliding_fraction() const { return pairs ? double(colliding) / double(pairs) : 0.0; }
   double fcl_agreement() const { return fcl_checked ? double(fcl_agree) / double(fcl_checked) : 1.0; }
-  double edge_edge_rate() const { return pairs ? double(edge_edge) / double(pairs) : 0.0; }
+  double missed_pair_rate() const { return colliding ? double(missed_pairs) / double(colliding) : 0.0; }
   double gimpact_agreement() const { return gimpact_checked ? double(gimpact_agree) / double(gimpact_checked) : 1.0; }
 };
 

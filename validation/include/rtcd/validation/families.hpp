@@ -35,7 +35,7 @@ struct Family {
   double step_motion() const;
 };
 
-// convex, concave, torus, plates, highres, primitives.
+// convex, concave, torus, plates, highres, primitives, bars (thin bars crossing), rings (a peg through a ring).
 const std::vector<std::string>& family_names();
 // Throws UsageError listing the names when `name` is not one of them.
 Family make_family(const std::string& name);
