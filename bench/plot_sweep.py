@@ -29,9 +29,10 @@ def main():
     if not rows:
         sys.exit(f"{sys.argv[1]}: no sweep points")
     title = f"{rows[0]['family']} family, {rows[0]['backend']} backend, {rows[0]['pairs']} pairs per point"
-    fig, axes = plt.subplots(1, 2, figsize=(13, 5.5))
+    fig, axes = plt.subplots(1, 3, figsize=(19, 5.5))
     for ax, column, label in ((axes[0], "missed_rate", "missed-ray rate"),
-                              (axes[1], "mean_depth_error", "mean depth error (length units)")):
+                              (axes[1], "missed_pair_rate", "missed-pair rate (of colliding pairs)"),
+                              (axes[2], "mean_depth_error", "mean depth error (length units)")):
         knobs = sorted({r["knob"] for r in rows})
         for knob in knobs:
             sel = [r for r in rows if r["knob"] == knob]

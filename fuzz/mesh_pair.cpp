@@ -1,17 +1,22 @@
 // libFuzzer harness: two small bodies (meshes from raw triangles, generator
 // meshes with moved vertices, or a sphere/box), two poses and a Config built
 // from the input, stepped 2-3 times on every usable CPU backend. Checks the
-// invariants of fuzz/invariants.hpp each step, and that basic and embree
-// find the same penetrating vertices in every full step.
+// invariants of fuzz/invariants.hpp each step, that basic and embree find
+// the same penetrating vertices in every full step, and that a pair FCL and
+// the exact reference find interpenetrating is colliding in every full step.
 //
 // Input layout: fuzz/pair_input.hpp.
 #include <cstdio>
 #include <cstdlib>
+#include <tuple>
 
 #include <tbb/global_control.h>
 
 #include "invariants.hpp"
 #include "pair_input.hpp"
+#include "rtcd/mesh_check.hpp"
+#include "rtcd/oracle/exact.hpp"
+#include "rtcd/oracle/third_party.hpp"
 
 namespace {
 
@@ -22,6 +27,31 @@ using namespace rtcd;
 tbb::global_control one_thread(tbb::global_control::max_allowed_parallelism, 1);
 
 const bool verbose = std::getenv("RTCD_FUZZ_VERBOSE") != nullptr;
+
+// A body whose inside is defined: a volume, or a mesh the checker finds fit
+// and closed, with no face crossing another.
+bool solid(const Shape& s) {
+  const Mesh* m = s.mesh();
+  if (m == nullptr) return !std::holds_alternative<HalfSpace>(s.geometry());
+  const MeshCheck check = check_mesh(m->positions(), m->triangles());
+  return check.fit() && check.closed && self_intersections(m->positions(), m->triangles(), 1).empty();
+}
+
+// Whether the exact reference finds either body inside the other deeper
+// than `band`: an origin, or an edge crossing with no origin inside.
+bool interpenetrate(const std::shared_ptr<const Shape>& a, const Pose& pa, const std::shared_ptr<const Shape>& b,
+                    const Pose& pb, double band) {
+  const oracle::ExactShape ea(a), eb(b);
+  for (const auto& [source, source_pose, target, target_pose] :
+       {std::tuple{a.get(), &pa, &eb, &pb}, std::tuple{b.get(), &pb, &ea, &pa}}) {
+    for (const oracle::ExactRay& r : target->rays_from(*source, *source_pose, *target_pose, band))
+      if (r.deep()) return true;
+    for (double depth : target->edge_depths(*source, *source_pose, *target_pose))
+      if (depth > band) return true;
+    if (target->sphere_depth(*source, *source_pose, *target_pose) > band) return true;
+  }
+  return false;
+}
 
 }  // namespace
 
@@ -84,5 +114,19 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
       if (x.pairs[0].mode == PairMode::full)
         fuzz::check_same_contacts(backends[0] + " step " + std::to_string(s), x, backends[k], y, band, tie);
     }
+  // Every pair that truly interpenetrates is reported: in a full step with
+  // edge contacts on, FCL colliding (triangles crossing) means colliding,
+  // unless the exact reference finds nothing deeper than the band (touching).
+  if (input->config.edge_contacts && solid(*shape_a) && solid(*shape_b)) {
+    const oracle::FclShape fcl_a(*shape_a), fcl_b(*shape_b);
+    for (int s = 0; s < steps; ++s) {
+      const StepResult& x = results[0][s];
+      if (x.pairs[0].mode != PairMode::full || x.pairs[0].colliding) continue;
+      if (!fcl_a.collide(poses_a[s], fcl_b, poses_b[s]).colliding) continue;
+      fuzz::require(!interpenetrate(shape_a, poses_a[s], shape_b, poses_b[s], band),
+                    "step " + std::to_string(s) + ": FCL and the exact reference find the bodies interpenetrating "
+                    "deeper than " + fuzz::num(band) + ", " + backends[0] + " calls them separate");
+    }
+  }
   return 0;
 }

@@ -311,6 +311,20 @@ std::vector<ExactRay> ExactShape::rays_from(const Shape& source, const Pose& sou
   return out;
 }
 
+double ExactShape::sphere_depth(const Shape& source, const Pose& source_pose, const Pose& pose) const {
+  const auto* sphere = std::get_if<Sphere>(&source.geometry());
+  if (sphere == nullptr) return -1.0;
+  const Vec c = (pose.inverse() * source_pose).position;
+  double depth = -1.0;
+  if (const auto* s = std::get_if<Sphere>(&shape_->geometry())) {
+    depth = sphere->radius + s->radius - c.norm();
+  } else if (const auto* b = std::get_if<Box>(&shape_->geometry())) {
+    const Vec q = c.cwiseMax(-b->half_extents).cwiseMin(b->half_extents);
+    depth = q == c ? sphere->radius + distance(c) : sphere->radius - (c - q).norm();
+  }
+  return depth > 0.0 ? depth : -1.0;
+}
+
 std::vector<double> ExactShape::edge_depths(const Shape& source, const Pose& source_pose, const Pose& pose) const {
   const Pose to_local = pose.inverse() * source_pose;
   const Eigen::Matrix3d rotation = to_local.orientation.toRotationMatrix();

@@ -144,6 +144,9 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   // Iterative runs: the mean over the motion steps, full steps they cause included.
   s.time_ours = seconds / double(options.pairs * (options.mode == RunMode::iterative ? options.motion_steps : 1));
 
+  s.vertex_rays = step.stats.rays_full + step.stats.rays_predictive + step.stats.rays_iterative;
+  s.edge_rays = step.stats.edge_rays;
+  s.edges_tested = step.stats.edges_tested;
   const oracle::ExactShape exact_a(family.a), exact_b(family.b);
   std::optional<oracle::FclShape> fcl_a, fcl_b;
   std::optional<oracle::GimpactShape> gimpact_a, gimpact_b;
@@ -181,12 +184,18 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     judge(rays_ab, ours_a, exact_b.closed(), epsilon, m, depth_error_sum);
     judge(rays_ba, ours_b, exact_a.closed(), epsilon, m, depth_error_sum);
     t = Clock::now();
-    for (const auto& depths : {exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),
-                               exact_a.edge_depths(*family.b, m.poses.b, m.poses.a)})
+    // Edge crossings, and a sphere's cap in a sphere or a box, in closed form.
+    for (auto depths : {exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),
+                        exact_a.edge_depths(*family.b, m.poses.b, m.poses.a)})
       for (double depth : depths) {
         m.crossing_deep += depth > epsilon;
         m.crossing_any += depth > 0.0;
       }
+    for (double depth : {exact_b.sphere_depth(*family.a, m.poses.a, m.poses.b),
+                         exact_a.sphere_depth(*family.b, m.poses.b, m.poses.a)}) {
+      m.crossing_deep += depth > epsilon;
+      m.crossing_any += depth > 0.0;
+    }
     s.time_exact += seconds_since(t);
     m.colliding_exact = m.deep > 0 || m.crossing_deep > 0;
 
@@ -296,6 +305,9 @@ nlohmann::json to_json(const Summary& s) {
           {"missed_pair_rate", s.missed_pair_rate()},
           {"false_pairs", s.false_pairs},
           {"crossing_pairs", s.crossing_pairs},
+          {"rays_per_pair", {{"vertex", double(s.vertex_rays) / double(s.pairs)},
+                             {"edge", double(s.edge_rays) / double(s.pairs)},
+                             {"edges_tested", double(s.edges_tested) / double(s.pairs)}}},
           {"gimpact", {{"pairs_run", s.gimpact_runs}, {"checked", s.gimpact_checked}, {"agreement", s.gimpact_agreement()}}},
           {"ccd", {{"pairs", s.ccd_pairs}, {"mean_abs_difference", s.ccd_mean_abs_difference}, {"mean_ratio", s.ccd_mean_ratio}}},
           {"seconds_per_pair", {{"ours", s.time_ours}, {"exact", s.time_exact}, {"fcl", s.time_fcl}, {"fcl_contacts", s.time_fcl_contacts},

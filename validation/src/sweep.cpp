@@ -54,12 +54,13 @@ std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, 
 
 void write_csv(std::ostream& out, const std::vector<SweepPoint>& points) {
   out << "knob,value,default,family,backend,mode,pairs,seconds_per_pair,missed_rate,false_rays,mean_depth_error,"
-         "max_relative_depth_error\n";
+         "max_relative_depth_error,missed_pair_rate,false_pairs\n";
   for (const SweepPoint& p : points) {
     const Summary& s = p.summary;
     out << p.knob << ',' << p.value << ',' << (p.is_default ? 1 : 0) << ',' << s.family << ',' << s.backend << ','
         << to_string(s.mode) << ',' << s.pairs << ',' << s.time_ours << ',' << s.missed_rate() << ',' << s.false_rays
-        << ',' << s.mean_depth_error << ',' << s.max_relative_depth_error << '\n';
+        << ',' << s.mean_depth_error << ',' << s.max_relative_depth_error << ',' << s.missed_pair_rate() << ','
+        << s.false_pairs << '\n';
   }
 }
 

@@ -68,6 +68,10 @@ class ExactShape {
   // leaving one). A depth beyond the margin is a crossing no vertex ray
   // sees. A half-space has none (an edge below its plane has an end below).
   std::vector<double> edge_depths(const Shape& source, const Pose& source_pose, const Pose& pose) const;
+  // A sphere `source` against this sphere or box: how deep the sphere
+  // reaches into it (the closed form); -1 when it does not, or for other
+  // shapes.
+  double sphere_depth(const Shape& source, const Pose& source_pose, const Pose& pose) const;
 
  private:
   struct Tree;

@@ -57,7 +57,7 @@ struct PairMetrics {
   size_t depth_checked = 0;
   double max_depth_error = 0.0, max_relative_depth_error = 0.0;
   size_t inside_any = 0;   // origins inside at any depth, both directions
-  size_t crossing_deep = 0;  // edges crossing the other body with neither end inside, deeper than epsilon
+  size_t crossing_deep = 0;  // edges crossing the other body with neither end inside (or a sphere's cap), deeper than epsilon
   size_t crossing_any = 0;   // ... at any depth
   bool colliding_exact = false;  // some origin or edge crossing deeper than epsilon
   bool colliding_ours = false;
@@ -92,6 +92,9 @@ struct Summary {
   // Pairs FCL calls colliding and rtcd separate where the exact reference
   // finds nothing deeper than epsilon (touching, within the tolerance).
   size_t fcl_touching_pairs = 0;
+  // The judged step's work: rays from origins (full traces, predictive
+  // rays, walks) and the edges' rays, and edges tested.
+  size_t vertex_rays = 0, edge_rays = 0, edges_tested = 0;
   size_t gimpact_runs = 0, gimpact_checked = 0, gimpact_agree = 0;
   size_t ccd_pairs = 0;
   double ccd_mean_abs_difference = 0.0, ccd_mean_ratio = 0.0;  // our largest projected depth vs libccd's
