@@ -91,7 +91,7 @@ struct RayCounts {
   size_t rays_predictive = 0;  // outward predictive rays traced (full steps and re-traces)
   size_t rays_iterative = 0;   // tracked rays walked in iterative steps
   size_t walk_steps = 0;       // triangles located by all walks
-  size_t nearest_queries = 0;  // nearest-triangle queries for vertices neither ray met
+  size_t nearest_queries = 0;  // nearest-triangle queries: vertices neither ray met, edges watched near the target
   size_t rays_retraced = 0;    // walked rays whose walks could not tell inside from outside, traced again
   size_t rays_watched = 0;     // tracked rays that reported nothing (vertices and edges near the target)
   size_t fold_casts = 0;       // walked contacts whose fold check cast a ray (beyond their face's clearance)

@@ -74,6 +74,7 @@ struct RayTally : RayCounts {
     if (o.edge) {
       ++edges_tested;
       edge_rays += o.edge_rays;
+      nearest_queries += o.nearest_query;
       edge_contacts += o.kind == RTCD_RAY_PENETRATING;
       return;
     }

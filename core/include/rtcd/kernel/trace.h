@@ -178,6 +178,24 @@ RTCD_INLINE void rtcd_watch_edge(const rtcd_trace_params* p, const rtcd_candidat
     o->kind = RTCD_RAY_WATCHED;
 }
 
+/* A full step watches a mesh edge only where the mesh's surface is within
+ * reach of it: some triangle within half_length its length plus the watch reach
+ * of its middle (a ball holding every point within reach of the segment).
+ * An edge farther off cannot cross the surface before the next full step;
+ * without this test every edge in the target's box would be tested every
+ * step. Walking steps keep the edges so chosen (the query costs more than
+ * the edge's ray). */
+RTCD_INLINE void rtcd_watch_mesh_edge(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
+                                      rtcd_outcome* o) {
+  float half_length;
+  rtcd_watch_edge(p, c, o);
+  if (o->kind != RTCD_RAY_WATCHED || p->iterative) return;
+  half_length = 0.5f * RTCD_SQRT(rtcd_dot(c->direction, c->direction));
+  o->nearest_query = 1;
+  if (rtcd_tracer_nearest(tracer, rtcd_add(c->origin, rtcd_scale(c->direction, 0.5f)), half_length + p->reach) < 0)
+    o->kind = RTCD_RAY_DROPPED;
+}
+
 /* Whether the point origin + m * along lies inside the target: its line
  * back toward the edge's first end leaves the target first. Sets *back to
  * that first hit. */
@@ -214,13 +232,13 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   first = rtcd_tracer_first_hit(tracer, &forward, 1.0f);
   o->edge_rays = 1;
   if (first.triangle < 0 || rtcd_tracer_leaves(tracer, first.triangle, c->direction)) {
-    rtcd_watch_edge(p, c, o);
+    rtcd_watch_mesh_edge(tracer, p, c, o);
     return;
   }
   last = rtcd_tracer_first_hit(tracer, &backward, 1.0f);
   o->edge_rays = 2;
   if (last.triangle < 0 || rtcd_tracer_leaves(tracer, last.triangle, rtcd_neg(c->direction))) {
-    rtcd_watch_edge(p, c, o);
+    rtcd_watch_mesh_edge(tracer, p, c, o);
     return;
   }
   a = first.t;
@@ -230,13 +248,13 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
     /* Touching (no span), or the middle lies in a gap between pieces: the
      * first piece ends where the ray from the middle met the surface. */
     if (!(a < b) || back.triangle < 0) {
-      rtcd_watch_edge(p, c, o);
+      rtcd_watch_mesh_edge(tracer, p, c, o);
       return;
     }
     b = m - back.t;
     m = 0.5f * (a + b);
     if (!(a < b) || !rtcd_edge_point_inside(tracer, c, m, &back, o)) {
-      rtcd_watch_edge(p, c, o);
+      rtcd_watch_mesh_edge(tracer, p, c, o);
       return;
     }
   }
@@ -247,7 +265,7 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   if (o->triangle < 0) o->triangle = first.triangle;
   tolerance = RTCD_TOUCHING * length;
   if (!(rtcd_tracer_distance2(tracer, o->triangle, point) > tolerance * tolerance)) {
-    rtcd_watch_edge(p, c, o);
+    rtcd_watch_mesh_edge(tracer, p, c, o);
     return;
   }
   o->kind = RTCD_RAY_PENETRATING;
