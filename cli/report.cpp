@@ -37,6 +37,7 @@ nlohmann::json stats_json(const StepStats& s) {
           {"rays_watched", s.rays_watched},
           {"fold_casts", s.fold_casts},
           {"edges_tested", s.edges_tested},
+          {"edges_skipped", s.edges_skipped},
           {"edge_rays", s.edge_rays},
           {"edge_contacts", s.edge_contacts},
           {"bytes_to_device", s.bytes_to_device},

@@ -104,6 +104,7 @@ inline void expect_same_step(const StepResult& x, const StepResult& y, const std
   EXPECT_EQ(a.fold_casts, b.fold_casts);
   EXPECT_EQ(a.walk_endings, b.walk_endings);
   EXPECT_EQ(a.edges_tested, b.edges_tested);
+  EXPECT_EQ(a.edges_skipped, b.edges_skipped);
   EXPECT_EQ(a.edge_rays, b.edge_rays);
   EXPECT_EQ(a.edge_contacts, b.edge_contacts);
 }

@@ -285,6 +285,7 @@ rtcd_trace_params make_trace_params(const RayJob& job, const Shape& source, cons
   // A convex target cannot fold between a ray's entry and exit faces.
   p.verify = config.verify_walks && !(target.mesh() && target.mesh()->convex());
   p.iterative = job.iterative;
+  p.moved = float_at_least(job.moved);
   p.first_edge = source.sources().first_edge();
   p.source_radius = source.sources().sphere_radius;
   // A half-space needs no edge test: a body crossing its plane has an

@@ -144,6 +144,7 @@ RayCounts& RayCounts::operator+=(const RayCounts& o) {
   rays_watched += o.rays_watched;
   fold_casts += o.fold_casts;
   edges_tested += o.edges_tested;
+  edges_skipped += o.edges_skipped;
   edge_rays += o.edge_rays;
   edge_contacts += o.edge_contacts;
   for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) walk_endings[e] += o.walk_endings[e];

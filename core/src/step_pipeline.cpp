@@ -167,6 +167,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     PairState* state;
     bool fresh;
     PairLimits limits;
+    double moved;  // walking pairs: equation 2.1 since the pair's last full step
     uint32_t list, first;
   };
 
@@ -307,6 +308,7 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
       job.target = bodies_[target].shape;
       job.iterative = iterative;
       job.limits = w.limits;
+      job.moved = iterative ? w.moved : 0.0;
       const int direction = source == std::min(p.a, p.b) ? 0 : 1;
       job.tracked = w.state->tracked[direction];
       job.residence = &w.state->residence[direction];
@@ -340,9 +342,9 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
   }
   PairState& state = *w.state;
   bool iterative = false;
+  w.moved = w.fresh || config_.mode == Mode::full ? 0.0 : max_displacement(state.relative_at_full, relative, radius);
   if (!w.fresh && config_.mode == Mode::iterative) iterative = true;
-  if (!w.fresh && config_.mode == Mode::automatic)
-    iterative = max_displacement(state.relative_at_full, relative, radius) <= w.limits.displacement_threshold;
+  if (!w.fresh && config_.mode == Mode::automatic) iterative = w.moved <= w.limits.displacement_threshold;
   if (!iterative) {
     state.relative_at_full = relative;
     state.tracked[0].clear();

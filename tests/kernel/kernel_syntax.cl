@@ -73,6 +73,7 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   p.first_edge = 1u;
   p.edges = 1;
   p.source_radius = 0.0f;
+  p.moved = 0.0f;
   c.vertex = 0u;
   c.start = c.entry = 0;
   c.job = 0u;

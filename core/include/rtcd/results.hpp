@@ -95,7 +95,8 @@ struct RayCounts {
   size_t rays_retraced = 0;    // walked rays whose walks could not tell inside from outside, traced again
   size_t rays_watched = 0;     // tracked rays that reported nothing (vertices and edges near the target)
   size_t fold_casts = 0;       // walked contacts whose fold check cast a ray (beyond their face's clearance)
-  size_t edges_tested = 0;     // edges tested for a crossing (Config::edge_contacts), in every mode
+  size_t edges_tested = 0;     // edges (and spheres' deepest points) taken for a crossing test (Config::edge_contacts)
+  size_t edges_skipped = 0;    // of those, watched edges still farther from the surface than the pair has moved
   size_t edge_rays = 0;        // rays those tests cast
   size_t edge_contacts = 0;    // edges that cross the target with neither end inside
   std::array<size_t, RTCD_LINE_STATUS_COUNT> walk_endings{};  // iterative rays by rtcd_line_status

@@ -51,6 +51,10 @@ struct RayJob {
   Aabb overlap;
   bool iterative = false;
   PairLimits limits;
+  // Iterative jobs: how far a point of the source may have moved relative
+  // to the target since the pair's last full step (equation 2.1); a watched
+  // edge farther from the surface than this needs no test yet.
+  double moved = 0.0;
   // Iterative jobs: last step's kept outcomes, the walks' start triangles.
   std::span<const RayOutcome> tracked;
   // The pair-direction's note for the executor, read and written by it;
@@ -73,6 +77,9 @@ struct RayTally : RayCounts {
     rays_watched += o.kind == RTCD_RAY_WATCHED;
     if (o.edge) {
       ++edges_tested;
+      // A watched edge left untested (still farther from the surface than
+      // the pair has moved) casts nothing.
+      edges_skipped += o.edge == RTCD_ITEM_EDGE && o.edge_rays == 0 && !o.nearest_query;
       edge_rays += o.edge_rays;
       nearest_queries += o.nearest_query;
       edge_contacts += o.kind == RTCD_RAY_PENETRATING;

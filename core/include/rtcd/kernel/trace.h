@@ -179,21 +179,35 @@ RTCD_INLINE void rtcd_watch_edge(const rtcd_trace_params* p, const rtcd_candidat
 }
 
 /* A full step watches a mesh edge only where the mesh's surface is within
- * reach of it: some triangle within half_length its length plus the watch reach
+ * reach of it: some triangle within half its length plus the watch reach
  * of its middle (a ball holding every point within reach of the segment).
  * An edge farther off cannot cross the surface before the next full step;
  * without this test every edge in the target's box would be tested every
- * step. Walking steps keep the edges so chosen (the query costs more than
- * the edge's ray). */
+ * step. The edge's clearance (the middle's distance to that triangle less
+ * half the length: no point of the edge is nearer the surface) rides in the
+ * outcome's entry field, so a walking step tests a watched edge only once
+ * the pair has moved that far since its full step (rtcd_edge_trace). */
 RTCD_INLINE void rtcd_watch_mesh_edge(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
                                       rtcd_outcome* o) {
-  float half_length;
+  float half_length, clearance;
+  rtcd_vec3 middle;
+  rtcd_int near;
   rtcd_watch_edge(p, c, o);
-  if (o->kind != RTCD_RAY_WATCHED || p->iterative) return;
+  if (o->kind != RTCD_RAY_WATCHED) return;
+  if (p->iterative) {
+    o->entry = c->entry; /* the clearance found by the full step */
+    return;
+  }
   half_length = 0.5f * RTCD_SQRT(rtcd_dot(c->direction, c->direction));
+  middle = rtcd_add(c->origin, rtcd_scale(c->direction, 0.5f));
   o->nearest_query = 1;
-  if (rtcd_tracer_nearest(tracer, rtcd_add(c->origin, rtcd_scale(c->direction, 0.5f)), half_length + p->reach) < 0)
+  near = rtcd_tracer_nearest(tracer, middle, half_length + p->reach);
+  if (near < 0) {
     o->kind = RTCD_RAY_DROPPED;
+    return;
+  }
+  clearance = RTCD_SQRT(rtcd_tracer_distance2(tracer, near, middle)) - half_length;
+  o->entry = rtcd_float_bits(clearance > 0.0f ? clearance : 0.0f);
 }
 
 /* Whether the point origin + m * along lies inside the target: its line
@@ -229,6 +243,13 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   float a, b, m, length, tolerance;
   o->edge = RTCD_ITEM_EDGE;
   o->kind = RTCD_RAY_DROPPED;
+  /* A watched edge still farther from the surface than the pair has moved
+   * since its full step cannot cross it yet. */
+  if (p->iterative && c->entry >= 0 && rtcd_bits_float(c->entry) > p->moved) {
+    o->kind = RTCD_RAY_WATCHED;
+    o->entry = c->entry;
+    return;
+  }
   first = rtcd_tracer_first_hit(tracer, &forward, 1.0f);
   o->edge_rays = 1;
   if (first.triangle < 0 || rtcd_tracer_leaves(tracer, first.triangle, c->direction)) {

@@ -69,6 +69,7 @@ typedef struct {
   rtcd_uint first_edge; /* the source's items from here on are edges, or a sphere's one deepest-point item */
   rtcd_int edges;       /* those items are candidates (Config::edge_contacts) */
   float source_radius;  /* a sphere source: its radius; 0 otherwise */
+  float moved;          /* iterative jobs: the pair's motion since its full step (equation 2.1), rounded up */
 } rtcd_trace_params;
 
 RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {

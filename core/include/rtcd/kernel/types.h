@@ -52,6 +52,25 @@ RTCD_INLINE rtcd_vec3 rtcd_neg(rtcd_vec3 a) { return rtcd_v3(-a.x, -a.y, -a.z); 
 RTCD_INLINE float rtcd_dot(rtcd_vec3 a, rtcd_vec3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 RTCD_INLINE float rtcd_component(rtcd_vec3 v, int k) { return k == 0 ? v.x : (k == 1 ? v.y : v.z); }
 
+/* A float's bits in an int and back (an edge's clearance rides in an
+ * outcome's int field; unions pun in C, OpenCL C and GCC's C++). */
+RTCD_INLINE rtcd_int rtcd_float_bits(float f) {
+  union {
+    float f;
+    rtcd_int i;
+  } u;
+  u.f = f;
+  return u.i;
+}
+RTCD_INLINE float rtcd_bits_float(rtcd_int i) {
+  union {
+    float f;
+    rtcd_int i;
+  } u;
+  u.i = i;
+  return u.f;
+}
+
 /* How a ray's line ended up against the target surface. Shared by the walk,
  * the full tracers and the basic volumes, so statistics read the same. */
 typedef enum {
