@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include "rtcd/kernel/locate.h"
+#include "rtcd/kernel/tracer.h"
 #include "rtcd/kernel/volumes.h"
 #include "rtcd/mesh_gen.hpp"
 
@@ -114,6 +115,55 @@ TEST(Volumes, SphereAndBoxStatuses) {
   EXPECT_EQ(h.face, 3);  // -y
   EXPECT_FLOAT_EQ(h.t, 0.6f);
   EXPECT_EQ(rtcd_box_line(rtcd_v3(0, 0.7f, 0), x, rtcd_v3(0.5f, 0.5f, 0.5f)).status, RTCD_LINE_MISS);
+}
+
+}  // namespace
+
+namespace {
+
+// The unit box as a candidate box, the identity as the transform.
+rtcd_frame unit_frame() {
+  rtcd_frame f;
+  for (int k = 0; k < 9; ++k) f.rotation[k] = k % 4 == 0 ? 1.0 : 0.0;
+  for (int k = 0; k < 3; ++k) {
+    f.translation[k] = 0.0;
+    f.lo[k] = -1.0;
+    f.hi[k] = 1.0;
+  }
+  return f;
+}
+
+// An edge is a candidate when its segment meets the candidate box, even
+// with both ends outside it; a zero-length edge never is.
+TEST(Edges, PlacementTakesSegmentsThroughTheBoxAndNoZeroLengthEdge) {
+  const rtcd_frame f = unit_frame();
+  rtcd_vec3 o, d;
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-3, 0, 0), rtcd_v3(6, 0, 0), &o, &d), 1) << "through, both ends outside";
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-3, 2, 0), rtcd_v3(6, 0, 0), &o, &d), 0) << "beside the box";
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-3, 0, 0), rtcd_v3(1.9f, 0, 0), &o, &d), 0) << "stops short of it";
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-2, -2, 0), rtcd_v3(4, 4, 0), &o, &d), 1) << "diagonal through it";
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(0.5f, 0.5f, 0.5f), rtcd_v3(0, 0, 0), &o, &d), 0) << "zero length";
+  rtcd_trace_params p{};
+  p.first_edge = 4;
+  p.edges = 0;
+  EXPECT_EQ(rtcd_place_item(&f, &p, 5, rtcd_v3(-3, 0, 0), rtcd_v3(6, 0, 0), &o, &d), 0) << "edges switched off";
+  p.edges = 1;
+  EXPECT_EQ(rtcd_place_item(&f, &p, 5, rtcd_v3(-3, 0, 0), rtcd_v3(6, 0, 0), &o, &d), 1);
+}
+
+// The exact span of a line inside a sphere or a box, for an edge of any length.
+TEST(Edges, VolumeSpansAreExact) {
+  float a = 0, b = 0;
+  ASSERT_TRUE(rtcd_volume_span(RTCD_TARGET_SPHERE, 1.0f, rtcd_v3(0, 0, 0), rtcd_v3(-2, 0, 0), rtcd_v3(4, 0, 0), &a, &b));
+  EXPECT_FLOAT_EQ(a, 0.25f);
+  EXPECT_FLOAT_EQ(b, 0.75f);
+  ASSERT_TRUE(rtcd_volume_span(RTCD_TARGET_BOX, 0.0f, rtcd_v3(1, 0.5f, 0.5f), rtcd_v3(0, -1, 0), rtcd_v3(0, 4, 0), &a, &b));
+  EXPECT_FLOAT_EQ(a, 0.125f);
+  EXPECT_FLOAT_EQ(b, 0.375f);
+  EXPECT_FALSE(rtcd_volume_span(RTCD_TARGET_BOX, 0.0f, rtcd_v3(1, 0.5f, 0.5f), rtcd_v3(0, -1, 0.5f), rtcd_v3(0, 4, 0), &a, &b))
+      << "along a face: touching, not crossing";
+  EXPECT_EQ(rtcd_box_nearest_face(rtcd_v3(0.9f, 0, 0), rtcd_v3(1, 1, 1)), 0);
+  EXPECT_EQ(rtcd_box_nearest_face(rtcd_v3(0, 0, -0.95f), rtcd_v3(1, 1, 1)), 5);
 }
 
 }  // namespace
