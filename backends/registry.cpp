@@ -1,8 +1,8 @@
-// The registry: backends by name, compiled in when their dependency was found.
+// The registry: backends by kind, compiled in when their dependency was found.
 #include <sstream>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
-#include "rtcd/narrow_phase.hpp"
 #include "basic/basic_backend.hpp"
 #ifdef RTCD_WITH_EMBREE
 #include "embree/embree_backend.hpp"
@@ -33,8 +33,8 @@ std::vector<BackendInfo> available_backends() {
 namespace {
 // The CPU executor that finishes an OpenCL backend's steps after a fault:
 // the same tracer as the devices' (brute force), or the fastest BVH here.
-CpuFallback opencl_fallback(const std::string& name) {
-  if (name.rfind("opencl-basic", 0) == 0) return {"basic", make_basic_tracers};
+CpuFallback opencl_fallback(BackendKind kind) {
+  if (kind == BackendKind::opencl_basic) return {"basic", make_basic_tracers};
 #ifdef RTCD_WITH_EMBREE
   return {"embree", [] { return make_embree_tracers(); }};
 #else
@@ -44,30 +44,48 @@ CpuFallback opencl_fallback(const std::string& name) {
 }  // namespace
 #endif
 
-std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Config& config) {
+std::unique_ptr<NarrowPhase> make_narrow_phase(const BackendOptions& options, const Config& config) {
+  options.validate();
   config.validate();
   const auto list = available_backends();
-  auto usable = [&](const std::string& n) {
+  auto usable = [&](BackendKind kind) {
     for (const auto& b : list)
-      if (b.name == n) return b.usable;
+      if (b.name == to_string(kind)) return b.usable;
     return false;
   };
-  std::string chosen = name;
+  BackendOptions chosen = options;
   // A fixed order, fastest first, so a run stays reproducible.
-  if (name == "auto") chosen = usable("embree") ? "embree" : usable("opencl") ? "opencl" : "basic";
-  if (chosen == "basic") return make_basic_narrow_phase(config);
-#ifdef RTCD_WITH_OPENCL
-  // Built even without a usable device: it says why and runs on the CPU.
-  if (is_opencl_name(chosen)) return make_opencl_narrow_phase(chosen, config, opencl_fallback(chosen));
-#endif
+  if (options.kind == BackendKind::automatic)
+    chosen.kind = usable(BackendKind::embree)   ? BackendKind::embree
+                  : usable(BackendKind::opencl) ? BackendKind::opencl
+                                                : BackendKind::basic;
+  switch (chosen.kind) {
+    case BackendKind::basic:
+      return make_basic_narrow_phase(chosen, config);
+    case BackendKind::embree:
 #ifdef RTCD_WITH_EMBREE
-  if (is_embree_name(chosen) && usable("embree")) return make_embree_narrow_phase(chosen, config);
+      if (usable(BackendKind::embree)) return make_embree_narrow_phase(chosen, config);
 #endif
+      break;
+    case BackendKind::opencl:
+    case BackendKind::opencl_basic:
+#ifdef RTCD_WITH_OPENCL
+      // Built even without a usable device: it says why and runs on the CPU.
+      return make_opencl_narrow_phase(chosen, config, opencl_fallback(chosen.kind));
+#endif
+      break;
+    case BackendKind::automatic:
+      break;
+  }
   std::ostringstream s;
-  s << "backend '" << name << "' is not available; available:";
+  s << "backend '" << options.to_string() << "' is not available; available:";
   for (const auto& b : list) s << ' ' << b.name << (b.usable ? "" : " (unusable: " + b.detail + ")");
   s << " auto";
   throw BackendError(s.str());
+}
+
+std::unique_ptr<NarrowPhase> make_narrow_phase(std::string_view name, const Config& config) {
+  return make_narrow_phase(BackendOptions::parse(name), config);
 }
 
 }  // namespace rtcd

@@ -4,6 +4,7 @@
 
 #include <memory>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/narrow_phase.hpp"
 

@@ -8,6 +8,8 @@
 #include <thread>
 #include <tuple>
 
+#include "rtcd/backend.hpp"
+
 #include <benchmark/benchmark.h>
 
 #include "bench_scene.hpp"

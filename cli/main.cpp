@@ -13,6 +13,7 @@
 #include "report.hpp"
 #include "run.hpp"
 #include "validate.hpp"
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
 

@@ -20,7 +20,7 @@ nlohmann::json record(const RayRecord& r) {
 
 nlohmann::json stats_json(const StepStats& s) {
   nlohmann::json endings;
-  for (int i = 0; i < RTCD_LINE_STATUS_COUNT; ++i) endings[line_status_name(i)] = s.walk_endings[i];
+  for (int i = 0; i < kLineStatusCount; ++i) endings[line_status_name(i)] = s.walk_endings[i];
   nlohmann::json devices = nlohmann::json::array();
   for (const DeviceWork& d : s.devices) devices.push_back({{"jobs", d.jobs}, {"rays", d.rays}});
   return {{"pairs_full", s.pairs_full},

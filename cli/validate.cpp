@@ -7,6 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/validation/sweep.hpp"

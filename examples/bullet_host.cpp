@@ -8,6 +8,7 @@
 
 #include <btBulletDynamicsCommon.h>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/mesh.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/sim/dispatcher.hpp"

@@ -12,6 +12,7 @@
 #include <string>
 #include <utility>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/narrow_phase.hpp"
 
 namespace rtcd::fuzz {

@@ -10,6 +10,8 @@
 #include <cstdlib>
 #include <cstring>
 
+#include "rtcd/backend.hpp"
+
 #include <tbb/global_control.h>
 
 #include "invariants.hpp"

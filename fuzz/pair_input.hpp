@@ -22,6 +22,7 @@
 #include <fuzzer/FuzzedDataProvider.h>
 
 #include "invariants.hpp"
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/narrow_phase.hpp"

@@ -16,6 +16,7 @@
 
 #include "inputs.hpp"
 #include "invariants.hpp"
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
 

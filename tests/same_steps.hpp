@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/validation/families.hpp"
 

@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/narrow_phase.hpp"
 
 namespace rtcd::test {

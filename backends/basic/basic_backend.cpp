@@ -37,8 +37,9 @@ class BasicTracerFactory final : public MeshTracerFactory {
 
 }  // namespace
 
-std::unique_ptr<NarrowPhase> make_basic_narrow_phase(const Config& config) {
-  return make_pipeline_narrow_phase("basic", {"cpu (TBB)"}, make_cpu_executor(make_basic_tracers()), config);
+std::unique_ptr<NarrowPhase> make_basic_narrow_phase(const BackendOptions& options, const Config& config) {
+  return make_pipeline_narrow_phase(options.to_string(), {"cpu (TBB)"}, make_cpu_executor(make_basic_tracers()), config,
+                                    options.threads);
 }
 
 std::unique_ptr<MeshTracerFactory> make_basic_tracers() { return std::make_unique<BasicTracerFactory>(); }

@@ -169,28 +169,25 @@ class EmbreeTracerFactory final : public MeshTracerFactory {
 
 }  // namespace
 
-bool is_embree_name(const std::string& name) { return name == "embree" || name.rfind("embree:", 0) == 0; }
-
-std::string embree_isa(const std::string& name) {
-  if (name == "embree") return "";
-  const std::string option = "embree:isa=";
+namespace {
+// Throws BackendError unless Embree knows `isa` and this CPU runs it.
+void check_isa(const std::string& isa) {
+  if (isa.empty()) return;
   std::string known;
-  for (const Isa& isa : isas()) known += std::string(known.empty() ? "" : ", ") + isa.name;
-  if (name.rfind(option, 0) != 0)
-    throw BackendError("backend '" + name + "': embree takes one option, isa=NAME (" + known + ")");
-  const std::string wanted = name.substr(option.size());
-  for (const Isa& isa : isas())
-    if (wanted == isa.name) {
-      if (!isa.supported) throw BackendError("backend '" + name + "': this CPU does not run " + wanted);
-      return wanted;
+  for (const Isa& i : isas()) known += std::string(known.empty() ? "" : ", ") + i.name;
+  for (const Isa& i : isas())
+    if (isa == i.name) {
+      if (!i.supported) throw BackendError("backend 'embree:isa=" + isa + "': this CPU does not run " + isa);
+      return;
     }
-  throw BackendError("backend '" + name + "': unknown instruction set '" + wanted + "' (" + known + ")");
+  throw BackendError("backend 'embree:isa=" + isa + "': unknown instruction set '" + isa + "' (" + known + ")");
 }
+}  // namespace
 
-std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const std::string& name, const Config& config) {
-  const std::string isa = embree_isa(name);
-  return make_pipeline_narrow_phase(name, {embree_description(isa)}, make_cpu_executor(make_embree_tracers(isa)),
-                                    config);
+std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const BackendOptions& options, const Config& config) {
+  check_isa(options.isa);
+  return make_pipeline_narrow_phase(options.to_string(), {embree_description(options.isa)},
+                                    make_cpu_executor(make_embree_tracers(options.isa)), config, options.threads);
 }
 
 std::unique_ptr<MeshTracerFactory> make_embree_tracers(const std::string& isa) {

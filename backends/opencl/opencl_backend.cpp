@@ -28,22 +28,14 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
-#include <cstdlib>
 #include <iostream>
-#include <map>
-#include <mutex>
-#include <sstream>
 
-#include "bvh.hpp"
 #include "device_types.h"
 #include "rtcd/error.hpp"
+#include "runtime.hpp"
+#include "shape_data.hpp"
 
-namespace rtcd {
-namespace opencl_source {
-extern const char* const kKernels;
-}
-
+namespace rtcd::opencl {
 namespace {
 
 static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
@@ -54,289 +46,6 @@ static_assert(sizeof(rtcd_device_job) == 92 && sizeof(rtcd_device_shape) == 52 &
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8);
 
 constexpr size_t kGroupSize = 64;
-
-std::atomic<OpenClFault> g_injected{OpenClFault::none};
-
-OpenClFault requested_fault() {
-  if (g_injected != OpenClFault::none) return g_injected;
-  const char* text = std::getenv("RTCD_OPENCL_FAULT");
-  if (!text || !*text) return OpenClFault::none;
-  const std::string s = text;
-  if (s == "no_platform") return OpenClFault::no_platform;
-  if (s == "build") return OpenClFault::build;
-  if (s == "out_of_memory") return OpenClFault::out_of_memory;
-  if (s == "mid_step") return OpenClFault::mid_step;
-  throw BackendError("RTCD_OPENCL_FAULT='" + s + "': expected no_platform, build, out_of_memory or mid_step");
-}
-
-bool env_flag(const char* name) {
-  const char* text = std::getenv(name);
-  return text && *text && std::string(text) != "0";
-}
-
-// A bad name or device index: the caller's mistake, not a fault to survive.
-class NameError : public BackendError {
- public:
-  using BackendError::BackendError;
-};
-
-// How a batch's rays are laid out on the device. Compacted: a prefix sum
-// over each job's candidate flags, then one work-item per candidate (two
-// round trips: the counts, then the outcomes). Grid (Figure 2.6): one
-// work-item per item, candidate or not, traced in place (one round trip,
-// every item's outcome read back). By mode: grid for iterative batches,
-// whose items are last step's rays and nearly all candidates; compacted for
-// full ones, where most vertices are not (docs/results/opencl.md measures both).
-enum class Layout { by_mode, grid, compact };
-
-struct Selection {
-  bool bvh = true;
-  Layout layout = Layout::by_mode;
-  cl_device_type type = CL_DEVICE_TYPE_ALL;
-  std::vector<size_t> indices;  // empty: every device
-};
-
-Selection parse_name(const std::string& name) {
-  Selection s;
-  std::string rest;
-  if (name.rfind("opencl-basic", 0) == 0) {
-    s.bvh = false;
-    rest = name.substr(12);
-  } else if (name.rfind("opencl", 0) == 0) {
-    rest = name.substr(6);
-  }
-  auto bad = [&](const std::string& why) {
-    return NameError("backend '" + name + "': " + why +
-                     " (expected opencl or opencl-basic, then :gpu, :cpu, :devices=0,1, :layout=grid or :layout=compact)");
-  };
-  if (!is_opencl_name(name)) throw bad("not an OpenCL backend name");
-  while (!rest.empty()) {
-    if (rest[0] != ':') throw bad("options follow a ':'");
-    const size_t next = rest.find(':', 1);
-    const std::string option = rest.substr(1, next == std::string::npos ? std::string::npos : next - 1);
-    rest = next == std::string::npos ? "" : rest.substr(next);
-    if (option == "gpu") {
-      s.type = CL_DEVICE_TYPE_GPU;
-    } else if (option == "cpu") {
-      s.type = CL_DEVICE_TYPE_CPU;
-    } else if (option == "layout=grid" || option == "layout=compact") {
-      s.layout = option == "layout=grid" ? Layout::grid : Layout::compact;
-    } else if (option.rfind("devices=", 0) == 0) {
-      std::stringstream list(option.substr(8));
-      std::string item;
-      while (std::getline(list, item, ',')) {
-        if (item.empty() || item.find_first_not_of("0123456789") != std::string::npos) throw bad("bad device index '" + item + "'");
-        const size_t index = std::stoul(item);
-        if (std::find(s.indices.begin(), s.indices.end(), index) != s.indices.end()) throw bad("device " + item + " twice");
-        s.indices.push_back(index);
-      }
-      if (s.indices.empty()) throw bad("no device index");
-    } else {
-      throw bad("unknown option '" + option + "'");
-    }
-  }
-  return s;
-}
-
-std::string error_name(cl_int code) {
-  switch (code) {
-    case CL_DEVICE_NOT_FOUND: return "CL_DEVICE_NOT_FOUND";
-    case CL_MEM_OBJECT_ALLOCATION_FAILURE: return "CL_MEM_OBJECT_ALLOCATION_FAILURE (out of device memory)";
-    case CL_OUT_OF_RESOURCES: return "CL_OUT_OF_RESOURCES";
-    case CL_OUT_OF_HOST_MEMORY: return "CL_OUT_OF_HOST_MEMORY";
-    case CL_BUILD_PROGRAM_FAILURE: return "CL_BUILD_PROGRAM_FAILURE";
-    case CL_INVALID_BUFFER_SIZE: return "CL_INVALID_BUFFER_SIZE";
-    case CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST: return "CL_EXEC_STATUS_ERROR_FOR_EVENTS_IN_WAIT_LIST";
-    case -1001: return "CL_PLATFORM_NOT_FOUND_KHR (no OpenCL platform installed)";
-    default: return "OpenCL error " + std::to_string(code);
-  }
-}
-
-std::string describe(const cl::Error& e) { return std::string(e.what()) + ": " + error_name(e.err()); }
-
-struct Found {
-  cl::Platform platform;
-  std::vector<cl::Device> devices;
-};
-
-// The first platform with devices of the selection's type, and the chosen
-// ones among them. BackendError when there are none; NameError for an index
-// past the platform's devices.
-Found find_devices(const Selection& s) {
-  std::vector<cl::Platform> platforms;
-  try {
-    cl::Platform::get(&platforms);
-  } catch (const cl::Error& e) {
-    throw BackendError("no OpenCL platform (" + describe(e) + ")");
-  }
-  for (const cl::Platform& platform : platforms) {
-    std::vector<cl::Device> devices;
-    try {
-      platform.getDevices(s.type, &devices);
-    } catch (const cl::Error&) {
-      continue;  // CL_DEVICE_NOT_FOUND: none of this type here
-    }
-    if (devices.empty()) continue;
-    if (s.indices.empty()) return {platform, devices};
-    Found found{platform, {}};
-    for (size_t i : s.indices) {
-      if (i >= devices.size())
-        throw NameError("OpenCL device " + std::to_string(i) + " does not exist: " +
-                        platform.getInfo<CL_PLATFORM_NAME>() + " has " + std::to_string(devices.size()));
-      found.devices.push_back(devices[i]);
-    }
-    return found;
-  }
-  throw BackendError(platforms.empty() ? "no OpenCL platform" : "no OpenCL device of the requested type");
-}
-
-bool has_fp64(const cl::Device& d) { return d.getInfo<CL_DEVICE_EXTENSIONS>().find("cl_khr_fp64") != std::string::npos; }
-bool rounds_division(const cl::Device& d) {
-  return (d.getInfo<CL_DEVICE_SINGLE_FP_CONFIG>() & CL_FP_CORRECTLY_ROUNDED_DIVIDE_SQRT) != 0;
-}
-
-std::string describe(const cl::Platform& platform, const cl::Device& d, size_t index) {
-  std::ostringstream s;
-  s << '[' << index << "] " << d.getInfo<CL_DEVICE_NAME>() << " (" << platform.getInfo<CL_PLATFORM_NAME>() << "), "
-    << d.getInfo<CL_DEVICE_MAX_COMPUTE_UNITS>() << " compute units, "
-    << d.getInfo<CL_DEVICE_GLOBAL_MEM_SIZE>() / (1024 * 1024) << " MiB, " << (has_fp64(d) ? "fp64" : "no fp64");
-  return s.str();
-}
-
-// A context and a built program for a device set, shared by every narrow
-// phase of the process that asks for the same set (building takes long).
-struct Runtime {
-  cl::Context context;
-  std::vector<cl::Device> devices;
-  cl::Program program;
-  bool place_on_device = true;  // every device has fp64: rays are placed there
-  std::vector<std::string> descriptions;
-};
-
-std::shared_ptr<const Runtime> acquire_runtime(const Selection& s, OpenClFault fault) {
-  if (fault == OpenClFault::no_platform) throw BackendError("no OpenCL platform (injected fault)");
-  const bool host_places = env_flag("RTCD_OPENCL_NO_FP64");
-  std::ostringstream key;
-  key << s.bvh << '/' << s.type << '/' << host_places << '/' << (fault == OpenClFault::build);
-  for (size_t i : s.indices) key << ',' << i;
-  static std::mutex mutex;
-  // Never destroyed: releasing OpenCL objects after the driver has unloaded
-  // at exit crashes some ICDs.
-  static auto* cache = new std::map<std::string, std::shared_ptr<const Runtime>>;
-  std::lock_guard lock(mutex);
-  if (auto it = cache->find(key.str()); it != cache->end()) return it->second;
-
-  const Found found = find_devices(s);
-  auto runtime = std::make_shared<Runtime>();
-  runtime->devices = found.devices;
-  runtime->context = cl::Context(found.devices);
-  bool rounded = true;
-  for (const cl::Device& d : found.devices) {
-    runtime->place_on_device = runtime->place_on_device && has_fp64(d) && !host_places;
-    rounded = rounded && rounds_division(d);
-  }
-  // The CPU's arithmetic: OpenCL 1.2 otherwise allows a few ulp in division
-  // and sqrt, which decide walks' edge tests; contraction is off in types.h.
-  std::string options = "-cl-std=CL1.2";
-  if (rounded) options += " -cl-fp32-correctly-rounded-divide-sqrt";
-  if (s.bvh) options += " -DRTCD_BVH";
-  if (!runtime->place_on_device) options += " -DRTCD_NO_FP64";
-  if (fault == OpenClFault::build) options += " -DRTCD_INJECTED_BUILD_FAILURE";
-  runtime->program = cl::Program(runtime->context, std::string(opencl_source::kKernels));
-  try {
-    runtime->program.build(found.devices, options.c_str());
-  } catch (const cl::BuildError& e) {
-    std::string log;
-    for (const auto& [device, text] : e.getBuildLog()) log += text;
-    if (log.size() > 2000) log = log.substr(0, 2000) + " ...";
-    throw BackendError("the kernels failed to build with '" + options + "': " + log);
-  } catch (const cl::Error& e) {
-    throw BackendError("the kernels failed to build with '" + options + "': " + describe(e));
-  }
-  for (size_t i = 0; i < found.devices.size(); ++i) {
-    std::string text = describe(found.platform, found.devices[i], s.indices.empty() ? i : s.indices[i]);
-    text += runtime->place_on_device ? "; rays placed in double on the device" : "; rays placed in double on the host";
-    if (!rounded) text += "; division and sqrt not correctly rounded (walks may differ from the CPU)";
-    text += s.bvh ? "; BVH tracer" : "; brute-force tracer";
-    runtime->descriptions.push_back(text);
-  }
-  (*cache)[key.str()] = runtime;
-  return runtime;
-}
-
-// The concatenated shape data every device holds.
-struct ShapeData {
-  std::vector<rtcd_device_shape> table;
-  std::vector<rtcd_vec3> positions, normals, origins, directions;
-  std::vector<rtcd_uint> source_leaves;  // per origin: its leaf's node in the shape's source tree
-  // Fold guards: ring_first rebased into the one ring list, with a
-  // closing entry after the last mesh's triangles.
-  std::vector<rtcd_fold_face> fold_faces;
-  std::vector<rtcd_uint> ring_first{0};
-  std::vector<rtcd_int> ring;
-  std::vector<rtcd_uint> triangles, primitives;
-  std::vector<rtcd_int> neighbors;
-  std::vector<rtcd_uchar> zero_area;
-  std::vector<rtcd_bvh_node> nodes;
-
-  template <class T, class S>
-  static void append(std::vector<T>& to, const S& from) {
-    const auto* data = reinterpret_cast<const T*>(from.data());
-    to.insert(to.end(), data, data + from.size() * sizeof(from[0]) / sizeof(T));
-  }
-
-  void add(const Shape& shape, bool bvh) {
-    rtcd_device_shape d{};
-    d.first_vertex = rtcd_uint(positions.size());
-    d.first_triangle = rtcd_uint(triangles.size() / 3);
-    d.first_node = rtcd_uint(nodes.size());
-    d.first_primitive = rtcd_uint(primitives.size());
-    d.first_source = rtcd_uint(origins.size());
-    const RaySources& rs = shape.sources();
-    d.source_count = rs.item_count();
-    // Items as rtcd_place_item reads them: origins, then edges.
-    for (uint32_t i = 0; i < rs.item_count(); ++i) {
-      const Eigen::Vector3f o = rs.item_origin(i), dir = rs.item_direction(i);
-      origins.push_back(rtcd_v3(o.x(), o.y(), o.z()));
-      directions.push_back(rtcd_v3(dir.x(), dir.y(), dir.z()));
-    }
-    source_leaves.resize(origins.size(), 0);
-    for (uint32_t n = 0; n < rs.nodes.size(); ++n)
-      if (rs.nodes[n].child == 0)
-        for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = n;
-    if (const Mesh* mesh = shape.mesh()) {
-      d.kind = RTCD_TARGET_MESH;
-      d.triangle_count = rtcd_uint(mesh->triangle_count());
-      append(positions, mesh->positions());
-      append(triangles, mesh->triangles());
-      append(neighbors, mesh->neighbors());
-      append(normals, mesh->triangle_normals());
-      const Mesh::FoldGuard& guard = mesh->fold_guard();
-      append(fold_faces, guard.faces);
-      const rtcd_uint base = rtcd_uint(ring.size());
-      ring_first.pop_back();
-      for (uint32_t first : guard.ring_first) ring_first.push_back(base + first);
-      append(ring, guard.ring);
-      zero_area.insert(zero_area.end(), mesh->zero_area().begin(), mesh->zero_area().end());
-      if (bvh) {
-        const FlatBvh tree = build_flat_bvh(*mesh);
-        d.node_count = rtcd_uint(tree.nodes.size());
-        nodes.insert(nodes.end(), tree.nodes.begin(), tree.nodes.end());
-        primitives.insert(primitives.end(), tree.primitives.begin(), tree.primitives.end());
-      }
-    } else if (const auto* sphere = std::get_if<Sphere>(&shape.geometry())) {
-      d.kind = RTCD_TARGET_SPHERE;
-      d.radius = float(sphere->radius);
-    } else if (const auto* box = std::get_if<Box>(&shape.geometry())) {
-      d.kind = RTCD_TARGET_BOX;
-      const Eigen::Vector3f h = box->half_extents.cast<float>();
-      d.half_extents = rtcd_v3(h.x(), h.y(), h.z());
-    } else {
-      d.kind = RTCD_TARGET_HALFSPACE;
-    }
-    table.push_back(d);
-  }
-};
 
 // A device buffer that keeps its capacity from step to step.
 struct GrowingBuffer {
@@ -389,7 +98,7 @@ struct Device {
 class OpenClExecutor final : public RayExecutor {
  public:
   OpenClExecutor(std::string name, std::shared_ptr<const Runtime> runtime, std::string setup_fault, bool bvh,
-                 Layout layout, OpenClFault fault, CpuFallback fallback)
+                 DeviceLayout layout, OpenClFault fault, CpuFallback fallback)
       : name_(std::move(name)),
         runtime_(std::move(runtime)),
         bvh_(bvh),
@@ -720,9 +429,16 @@ class OpenClExecutor final : public RayExecutor {
     launch(d, k, d.host_jobs.size());
   }
 
-  // The pipeline never mixes modes in a batch.
+  // How a batch's rays are laid out (DeviceLayout). Compacted: a prefix sum
+  // over each job's candidate flags, then one work-item per candidate (two
+  // round trips: the counts, then the outcomes). Grid (Figure 2.6): one
+  // work-item per item, candidate or not, traced in place (one round trip,
+  // every item's outcome read back). By mode: grid for iterative batches,
+  // whose items are last step's rays and nearly all candidates; compacted
+  // for full ones, where most vertices are not (docs/results/opencl.md
+  // measures both). The pipeline never mixes modes in a batch.
   bool grid(const Device& d) const {
-    return layout_ == Layout::grid || (layout_ == Layout::by_mode && d.host_jobs.front().params.iterative);
+    return layout_ == DeviceLayout::grid || (layout_ == DeviceLayout::by_mode && d.host_jobs.front().params.iterative);
   }
 
   // The grid layout: every item placed and traced in place by one kernel
@@ -923,7 +639,7 @@ class OpenClExecutor final : public RayExecutor {
   std::string name_;
   std::shared_ptr<const Runtime> runtime_;
   bool bvh_;
-  Layout layout_;
+  DeviceLayout layout_;
   OpenClFault fault_;
   CpuFallback fallback_;
   std::string fault_message_;  // set once the devices are given up
@@ -935,22 +651,19 @@ class OpenClExecutor final : public RayExecutor {
   uint64_t step_ = 0;     // begin_step calls
   bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback
 };
-
 }  // namespace
+}  // namespace rtcd::opencl
 
-bool is_opencl_name(const std::string& name) {
-  for (const char* base : {"opencl-basic", "opencl"}) {
-    const std::string b = base;
-    if (name.rfind(b, 0) == 0 && (name.size() == b.size() || name[b.size()] == ':')) return true;
-  }
-  return false;
-}
+namespace rtcd {
 
-std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const std::string& name, const Config& config,
+std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const BackendOptions& options, const Config& config,
                                                       CpuFallback fallback) {
+  using namespace opencl;
   config.validate();
-  const Selection selection = parse_name(name);
-  const OpenClFault fault = requested_fault();
+  options.validate();
+  const Selection selection = Selection::of(options);
+  const OpenClFault fault = requested_opencl_fault();
+  const std::string name = options.to_string();
   std::shared_ptr<const Runtime> runtime;
   std::string setup_fault;
   std::vector<std::string> devices;
@@ -965,12 +678,13 @@ std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const std::string& name, c
     setup_fault = describe(e);
   }
   if (!setup_fault.empty()) devices = {"cpu fallback (" + fallback.name + "): " + setup_fault};
-  auto executor = std::make_unique<OpenClExecutor>(name, std::move(runtime), setup_fault, selection.bvh, selection.layout, fault,
-                                                   std::move(fallback));
-  return make_pipeline_narrow_phase(name, std::move(devices), std::move(executor), config);
+  auto executor = std::make_unique<OpenClExecutor>(name, std::move(runtime), setup_fault, selection.bvh, options.layout,
+                                                   fault, std::move(fallback));
+  return make_pipeline_narrow_phase(name, std::move(devices), std::move(executor), config, options.threads);
 }
 
 std::vector<BackendInfo> opencl_backend_infos() {
+  using namespace opencl;
   // Platforms do not come and go within a process.
   static const std::vector<BackendInfo> infos = [] {
     std::vector<BackendInfo> list;
@@ -989,7 +703,5 @@ std::vector<BackendInfo> opencl_backend_infos() {
   }();
   return infos;
 }
-
-void inject_opencl_fault(OpenClFault fault) { g_injected = fault; }
 
 }  // namespace rtcd

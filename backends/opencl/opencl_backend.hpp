@@ -8,16 +8,10 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/cpu_executor.hpp"
 
 namespace rtcd {
-
-// Registry names: "opencl" (stackless BVH) or "opencl-basic" (every ray
-// against every triangle, bit for bit the CPU `basic`), optionally followed
-// by ":gpu", ":cpu" (device type) and ":devices=0,1" (device indices on the
-// first platform that has devices of that type). Default: every device of
-// the first platform with any.
-bool is_opencl_name(const std::string& name);
 
 // The executor that finishes steps when the devices cannot: the CPU
 // executor with this tracer factory.
@@ -26,10 +20,11 @@ struct CpuFallback {
   std::function<std::unique_ptr<MeshTracerFactory>()> tracers;
 };
 
-// Throws BackendError for a name it cannot parse or a device index that
-// does not exist; a missing platform or any later device fault is reported
-// on stderr once and handled by `fallback`.
-std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const std::string& name, const Config& config,
+// options.kind: opencl (stackless BVH) or opencl_basic (every ray against
+// every triangle, bit for bit the CPU `basic`). Throws BackendError for a
+// device index that does not exist; a missing platform or any later device
+// fault is reported on stderr once and handled by `fallback`.
+std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const BackendOptions& options, const Config& config,
                                                       CpuFallback fallback);
 
 // "opencl" and "opencl-basic", with the devices they would use (name,
@@ -41,5 +36,8 @@ std::vector<BackendInfo> opencl_backend_infos();
 // mid_step) does the same for a whole process.
 enum class OpenClFault { none, no_platform, build, out_of_memory, mid_step };
 void inject_opencl_fault(OpenClFault fault);
+// The fault in force: the injected one, else RTCD_OPENCL_FAULT's; throws
+// BackendError for a value it does not know.
+OpenClFault requested_opencl_fault();
 
 }  // namespace rtcd

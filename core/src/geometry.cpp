@@ -7,6 +7,7 @@
 #include "rtcd/criterion.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/geometry.hpp"
+#include "rtcd/kernel/types.h"
 #include "rtcd/results.hpp"
 
 namespace rtcd {
@@ -157,6 +158,8 @@ void StepStats::reset() {
   *this = {};
   devices = std::move(kept);
 }
+
+static_assert(kLineStatusCount == RTCD_LINE_STATUS_COUNT, "results.hpp mirrors the kernel's line statuses");
 
 const char* line_status_name(int status) {
   static const char* names[RTCD_LINE_STATUS_COUNT] = {"hit",  "behind",     "front",   "boundary",

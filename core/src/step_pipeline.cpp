@@ -7,6 +7,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
+
+#include <tbb/task_arena.h>
 
 #include "parallel.hpp"
 #include "rtcd/criterion.hpp"
@@ -106,19 +109,21 @@ struct ShapeEntry {
 class PipelineNarrowPhase final : public NarrowPhase {
  public:
   PipelineNarrowPhase(std::string name, std::vector<std::string> devices, std::unique_ptr<RayExecutor> executor,
-                      const Config& config)
+                      const Config& config, int threads)
       : NarrowPhase(config),
         name_(std::move(name)),
         devices_(std::move(devices)),
         executor_(std::move(executor)),
-        derive_(derives_limits(config_)) {}
+        derive_(derives_limits(config_)) {
+    if (threads > 0) arena_.emplace(threads);
+  }
 
   std::string name() const override { return name_; }
   std::vector<std::string> devices() const override { return devices_; }
 
   ShapeId add_shape(std::shared_ptr<const Shape> shape) override {
     if (!shape) throw UsageError("add_shape: null shape");
-    executor_->add_shape(shape);
+    in_arena([&] { executor_->add_shape(shape); });
     shapes_.emplace_back(std::move(shape), derive_);
     return ShapeId(shapes_.size() - 1);
   }
@@ -146,9 +151,21 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void set_pose(BodyId body, const Pose& pose) override { body_at(body).pose = checked(pose); }
 
   using NarrowPhase::detect;
-  void detect(std::span<const BodyPair> pairs, StepResult& out) override;
+  void detect(std::span<const BodyPair> pairs, StepResult& out) override {
+    in_arena([&] { step(pairs, out); });
+  }
 
  private:
+  // Runs `work` in the narrow phase's own arena, if it has one.
+  template <class Work>
+  void in_arena(const Work& work) {
+    if (arena_)
+      arena_->execute(work);
+    else
+      work();
+  }
+  void step(std::span<const BodyPair> pairs, StepResult& out);
+
   struct Body {
     ShapeId shape;
     Pose pose;
@@ -187,6 +204,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::string name_;
   std::vector<std::string> devices_;
   std::unique_ptr<RayExecutor> executor_;
+  std::optional<tbb::task_arena> arena_;  // threads > 0: this narrow phase's own
   bool derive_;  // some limit follows the scene: shapes are measured, motions tracked
   std::vector<ShapeEntry> shapes_;
   std::vector<Body> bodies_;
@@ -221,7 +239,7 @@ void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
                      " appears twice in one step");
 }
 
-void PipelineNarrowPhase::detect(std::span<const BodyPair> pairs, StepResult& out) {
+void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out) {
   // One clock reading per stage boundary: on some machines a reading costs
   // as much as a walk.
   auto lap = [last = Clock::now()]() mutable {
@@ -530,9 +548,12 @@ RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative) {
 }
 
 std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,
-                                                        std::unique_ptr<RayExecutor> executor, const Config& config) {
+                                                        std::unique_ptr<RayExecutor> executor, const Config& config,
+                                                        int threads) {
   if (!executor) throw UsageError("make_pipeline_narrow_phase: null executor");
-  return std::make_unique<PipelineNarrowPhase>(std::move(name), std::move(devices), std::move(executor), config);
+  if (threads < 0) throw UsageError("make_pipeline_narrow_phase: negative thread count");
+  return std::make_unique<PipelineNarrowPhase>(std::move(name), std::move(devices), std::move(executor), config,
+                                               threads);
 }
 
 }  // namespace rtcd

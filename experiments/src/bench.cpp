@@ -1,4 +1,5 @@
 // `rtcd bench`: record, replay, simulate the variants, write the tables.
+#include "rtcd/backend.hpp"
 #include "rtcd/experiments/bench.hpp"
 
 #include <algorithm>

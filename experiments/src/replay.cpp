@@ -1,6 +1,7 @@
 // Lockstep replay: one pass over the recording; at each step every
 // configuration due runs on the same poses and pairs, then the exact
 // reference judges the rays of ours on the sampled steps.
+#include "rtcd/backend.hpp"
 #include "rtcd/experiments/replay.hpp"
 
 #include <algorithm>

@@ -1,5 +1,6 @@
 // The simulation host: a Bullet world whose collision step is rtcd's batch
 // dispatcher, stages assembled from the scene's effects.
+#include "rtcd/backend.hpp"
 #include "rtcd/limits.hpp"
 #include "rtcd/sim/simulation.hpp"
 

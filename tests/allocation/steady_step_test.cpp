@@ -19,6 +19,7 @@
 
 #include <gtest/gtest.h>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "support.hpp"

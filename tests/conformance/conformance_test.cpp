@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "support.hpp"

@@ -1,6 +1,8 @@
 // A host that finds rtcd with find_package and detects one contact.
 #include <cstdio>
 
+#include "rtcd/backend.hpp"
+
 #include <rtcd/narrow_phase.hpp>
 
 int main() {

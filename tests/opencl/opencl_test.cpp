@@ -13,6 +13,7 @@
 
 #include "opencl/bvh.hpp"
 #include "opencl/opencl_backend.hpp"
+#include "rtcd/backend.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/validation/differential.hpp"

@@ -12,6 +12,7 @@
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/oracle/exact.hpp"

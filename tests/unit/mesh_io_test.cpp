@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/narrow_phase.hpp"

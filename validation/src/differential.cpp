@@ -1,4 +1,5 @@
 // Differential validation (see differential.hpp).
+#include "rtcd/backend.hpp"
 #include "rtcd/validation/differential.hpp"
 
 #include <algorithm>

@@ -1,5 +1,4 @@
-// The one interface every backend implements, and the registry that makes
-// them by name at run time.
+// The one interface every backend implements; rtcd/backend.hpp makes them.
 #pragma once
 
 #include <memory>
@@ -18,7 +17,7 @@ class NarrowPhase {
  public:
   virtual ~NarrowPhase() = default;
 
-  // The backend's registry name ("basic", "embree", ...).
+  // The backend's string form ("basic", "embree", "opencl:gpu", ...).
   virtual std::string name() const = 0;
   // Devices this instance runs on, in words.
   virtual std::vector<std::string> devices() const = 0;
@@ -46,18 +45,5 @@ class NarrowPhase {
   explicit NarrowPhase(Config config) : config_(config) { config_.validate(); }
   Config config_;
 };
-
-struct BackendInfo {
-  std::string name;
-  bool usable = false;
-  std::string detail;  // devices, or why it cannot run here
-};
-
-// Backends built into this library, usable or not.
-std::vector<BackendInfo> available_backends();
-
-// "basic", "embree" or "auto" (the fastest usable one; name() says which).
-// Throws BackendError listing what is available, ConfigError for a bad config.
-std::unique_ptr<NarrowPhase> make_narrow_phase(const std::string& name, const Config& config = {});
 
 }  // namespace rtcd

@@ -11,7 +11,6 @@
 #include <Eigen/Core>
 
 #include "rtcd/config.hpp"
-#include "rtcd/kernel/types.h"
 
 namespace rtcd {
 
@@ -25,7 +24,11 @@ struct BodyPair {
   BodyId b = 0;
 };
 
-enum class Side : uint8_t { a, b };  // which body of the pair cast the ray
+enum class Side : uint8_t { a, b };
+
+// How a walked ray's line ended (hit, behind, front, boundary, ...: see
+// line_status_name), the kernel's rtcd_line_status.
+inline constexpr int kLineStatusCount = 7;  // which body of the pair cast the ray
 
 // Fields common to a penetrating ray and a predictive one (world frame).
 struct RayRecord {
@@ -99,7 +102,7 @@ struct RayCounts {
   size_t edges_skipped = 0;    // of those, watched edges still farther from the surface than the pair has moved
   size_t edge_rays = 0;        // rays those tests cast
   size_t edge_contacts = 0;    // edges that cross the target with neither end inside
-  std::array<size_t, RTCD_LINE_STATUS_COUNT> walk_endings{};  // iterative rays by rtcd_line_status
+  std::array<size_t, kLineStatusCount> walk_endings{};  // iterative rays by rtcd_line_status
 
   RayCounts& operator+=(const RayCounts& other);
 };

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/backend.hpp"
 #include "rtcd/config.hpp"
 #include "rtcd/sim/recording.hpp"
 

@@ -135,7 +135,10 @@ class RayExecutor {
   virtual void account(StepStats& /*stats*/) const {}
 };
 
+// `threads` > 0: the narrow phase's steps run in a TBB arena of its own
+// with that many threads; 0: in the caller's.
 std::unique_ptr<NarrowPhase> make_pipeline_narrow_phase(std::string name, std::vector<std::string> devices,
-                                                        std::unique_ptr<RayExecutor> executor, const Config& config);
+                                                        std::unique_ptr<RayExecutor> executor, const Config& config,
+                                                        int threads = 0);
 
 }  // namespace rtcd

@@ -1,0 +1,37 @@
+// Shapes on the devices: every registered shape's data concatenated into
+// one set of arrays, as the kernels read them (device_types.h).
+#pragma once
+
+#include <vector>
+
+#include "device_types.h"
+#include "rtcd/shape.hpp"
+
+namespace rtcd::opencl {
+
+// The concatenated shape data every device holds.
+struct ShapeData {
+  std::vector<rtcd_device_shape> table;
+  std::vector<rtcd_vec3> positions, normals, origins, directions;
+  std::vector<rtcd_uint> source_leaves;  // per origin: its leaf's node in the shape's source tree
+  // Fold guards: ring_first rebased into the one ring list, with a
+  // closing entry after the last mesh's triangles.
+  std::vector<rtcd_fold_face> fold_faces;
+  std::vector<rtcd_uint> ring_first{0};
+  std::vector<rtcd_int> ring;
+  std::vector<rtcd_uint> triangles, primitives;
+  std::vector<rtcd_int> neighbors;
+  std::vector<rtcd_uchar> zero_area;
+  std::vector<rtcd_bvh_node> nodes;
+
+  template <class T, class S>
+  static void append(std::vector<T>& to, const S& from) {
+    const auto* data = reinterpret_cast<const T*>(from.data());
+    to.insert(to.end(), data, data + from.size() * sizeof(from[0]) / sizeof(T));
+  }
+
+  // Appends the shape's data (its BVH too when `bvh`) and its table entry.
+  void add(const Shape& shape, bool bvh);
+};
+
+}  // namespace rtcd::opencl
