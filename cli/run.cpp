@@ -18,7 +18,7 @@
 #include <thread>
 
 #include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 
 #include "console.hpp"
 #include "rtcd/sim/simulation.hpp"
@@ -75,10 +75,9 @@ int run_scene(const RunOptions& o) {
     scene.steps = *o.steps;
     std::erase_if(scene.snapshot_steps, [&](int64_t k) { return k >= int64_t(scene.steps) || k < -int64_t(scene.steps); });
   }
-  std::optional<tbb::global_control> threads;
   if (o.threads < 0) throw UsageError("--threads must be at least 1 (0: all cores)");
-  if (o.threads > 0) threads.emplace(tbb::global_control::max_allowed_parallelism, size_t(o.threads));
-  const size_t thread_count = tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism);
+  // The narrow phase's own (BackendOptions::threads); Bullet steps on one.
+  const size_t thread_count = o.threads > 0 ? size_t(o.threads) : size_t(tbb::this_task_arena::max_concurrency());
 
   const fs::path dir = o.out.empty() ? fs::path("runs") / (scene.name + "-" + timestamp()) : fs::path(o.out);
   std::error_code ec;
@@ -88,10 +87,10 @@ int run_scene(const RunOptions& o) {
   if (!csv) throw UsageError("cannot write " + (dir / "steps.csv").string());
   csv << std::setprecision(9) << kCsvHeader << '\n';
 
-  sim::Simulation simulation(scene, o.backend);
+  sim::Simulation simulation(scene, o.backend, o.threads);
   for (const std::string& w : simulation.warnings()) std::cerr << "rtcd: warning: " << w << '\n';
   std::cout << "scene " << scene.name << ": " << scene.body_count() << " bodies, " << scene.steps << " steps of "
-            << scene.time_step << " s, backend " << simulation.backend() << ", " << thread_count << " threads\n";
+            << scene.time_step << " s, backend " << simulation.backend() << ", narrow phase on " << thread_count << " threads\n";
 
   std::set<uint64_t> snapshot_at;
   if (scene.has(sim::Effect::snapshots))

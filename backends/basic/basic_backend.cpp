@@ -38,7 +38,7 @@ class BasicTracerFactory final : public MeshTracerFactory {
 }  // namespace
 
 std::unique_ptr<NarrowPhase> make_basic_narrow_phase(const BackendOptions& options, const Config& config) {
-  return make_pipeline_narrow_phase(options.to_string(), {"cpu (TBB)"}, make_cpu_executor(make_basic_tracers()), config,
+  return make_pipeline_narrow_phase(options.name(), {"cpu (TBB)"}, make_cpu_executor(make_basic_tracers()), config,
                                     options.threads);
 }
 

@@ -186,7 +186,7 @@ void check_isa(const std::string& isa) {
 
 std::unique_ptr<NarrowPhase> make_embree_narrow_phase(const BackendOptions& options, const Config& config) {
   check_isa(options.isa);
-  return make_pipeline_narrow_phase(options.to_string(), {embree_description(options.isa)},
+  return make_pipeline_narrow_phase(options.name(), {embree_description(options.isa)},
                                     make_cpu_executor(make_embree_tracers(options.isa)), config, options.threads);
 }
 

@@ -663,7 +663,7 @@ std::unique_ptr<NarrowPhase> make_opencl_narrow_phase(const BackendOptions& opti
   options.validate();
   const Selection selection = Selection::of(options);
   const OpenClFault fault = requested_opencl_fault();
-  const std::string name = options.to_string();
+  const std::string name = options.name();
   std::shared_ptr<const Runtime> runtime;
   std::string setup_fault;
   std::vector<std::string> devices;

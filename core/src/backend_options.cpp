@@ -111,6 +111,12 @@ std::string BackendOptions::to_string() const {
   return s;
 }
 
+std::string BackendOptions::name() const {
+  BackendOptions named = *this;
+  named.threads = 0;
+  return named.to_string();
+}
+
 void BackendOptions::validate() const {
   auto bad = [&](const std::string& why) { return BackendError("backend " + std::string(rtcd::to_string(kind)) + ": " + why); };
   if (threads < 0) throw bad("threads is negative (" + std::to_string(threads) + ")");

@@ -201,7 +201,7 @@ struct Simulation::Impl {
   StepRecord record;
   std::vector<std::string> warnings;
 
-  explicit Impl(const Scene& s, const std::string& backend_override);
+  Impl(const Scene& s, const std::string& backend_override, int threads);
   ~Impl();
   void make_kinds();
   void add_body(size_t spec, const Pose& shape_pose, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
@@ -217,18 +217,20 @@ struct Simulation::Impl {
   void measure();
 };
 
-Simulation::Impl::Impl(const Scene& s, const std::string& backend_override) : scene(s), rng(s.seed) {
+Simulation::Impl::Impl(const Scene& s, const std::string& backend_override, int threads) : scene(s), rng(s.seed) {
   backend_name = backend_override.empty() ? scene.backend : backend_override;
   const bool contacts = scene.has(Effect::contacts);
-  const bool use_gimpact = contacts && backend_name == kGimpact;
-  if (contacts && !use_gimpact) narrow = make_narrow_phase(backend_name, scene.narrow);
+  const bool use_gimpact = backend_name == kGimpact;
+  BackendOptions backend = use_gimpact ? BackendOptions{} : BackendOptions::parse(backend_name);
+  if (threads > 0) backend.threads = threads;
+  if (contacts && !use_gimpact) narrow = make_narrow_phase(backend, scene.narrow);
   if (scene.has(Effect::interpenetration)) {
     Config c = scene.narrow;
     c.mode = Mode::full;
     c.predictive = false;
-    probe = make_narrow_phase(backend_name == kGimpact ? "auto" : backend_name, c);
+    probe = make_narrow_phase(backend, c);
   }
-  if (use_gimpact) backend_name = kGimpact;
+  if (use_gimpact && contacts) backend_name = kGimpact;
   else if (narrow) backend_name = narrow->name();
   else if (probe) backend_name = probe->name();
   else backend_name = "none";
@@ -436,7 +438,8 @@ void Simulation::Impl::measure() {
   ++counters.interpenetration_passes;
 }
 
-Simulation::Simulation(const Scene& scene, const std::string& backend) : impl_(std::make_unique<Impl>(scene, backend)) {}
+Simulation::Simulation(const Scene& scene, const std::string& backend, int threads)
+    : impl_(std::make_unique<Impl>(scene, backend, threads)) {}
 
 Simulation::~Simulation() = default;
 

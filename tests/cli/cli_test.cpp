@@ -112,7 +112,7 @@ TEST_F(CliFiles, EveryBadInputExitsWith2AndOneClearLine) {
       {"query " + box + " " + box + " --pose-b \"1 0 0 x 0 0 0\"", "not a finite number"},
       {"query " + box + " " + box + " --pose-b \"1 0 0 0 0 0 0\"", "quaternion"},
       {"query " + box + " " + box + " --mode sometimes", "unknown mode"},
-      {"query " + box + " " + box + " --backend warp", "available"},
+      {"query " + box + " " + box + " --backend warp", "unknown backend 'warp'"},
       {"query " + box + " " + box + " --displacement-threshold 0.5 --distance-extension 0.1", "must not exceed"},
       {"query " + box + " " + box + " --max-walk-steps 0", "max_walk_steps"},
       {"query " + box + " " + box + " --sequence " + bad_json, "not valid JSON"},

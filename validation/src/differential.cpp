@@ -9,7 +9,6 @@
 #include <sstream>
 
 #include <nlohmann/json.hpp>
-#include <tbb/global_control.h>
 
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
@@ -88,8 +87,6 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   config.mode = options.mode == RunMode::full ? Mode::full : Mode::automatic;
   config.validate();
   const double epsilon = options.epsilon_scale * std::max(family.a->radius(), family.b->radius());
-  std::optional<tbb::global_control> one_thread;
-  if (options.single_thread) one_thread.emplace(tbb::global_control::max_allowed_parallelism, 1);
 
   RunResult result;
   Summary& s = result.summary;
@@ -102,7 +99,9 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   if (options.mode == RunMode::iterative) s.motion_steps = options.pairs * options.motion_steps;
 
   // Our backend: every pair in one batch, as a host would step them.
-  auto narrow = make_narrow_phase(options.backend, config);
+  BackendOptions backend = BackendOptions::parse(options.backend);
+  if (options.single_thread) backend.threads = 1;
+  auto narrow = make_narrow_phase(backend, config);
   s.backend = narrow->name();
   const ShapeId sa = narrow->add_shape(family.a), sb = narrow->add_shape(family.b);
   std::vector<PosePair> judged(options.pairs);

@@ -24,7 +24,7 @@ std::vector<BackendInfo> available_backends();
 
 // Throws BackendError listing what is available, or naming the option or
 // device that is wrong; ConfigError for a bad configuration. name() of the
-// result is options.to_string() with `automatic` resolved.
+// result is options.name() with `automatic` resolved.
 std::unique_ptr<NarrowPhase> make_narrow_phase(const BackendOptions& options, const Config& config = {});
 // The same from the string form (BackendOptions::parse).
 std::unique_ptr<NarrowPhase> make_narrow_phase(std::string_view name, const Config& config = {});

@@ -48,6 +48,9 @@ struct BackendOptions {
   static BackendOptions parse(std::string_view text);
   // The string form parse reads back, options in a fixed order.
   std::string to_string() const;
+  // The string form less the thread count: which backend, not how many
+  // threads it was given (NarrowPhase::name()).
+  std::string name() const;
   // Throws BackendError for an option the kind does not take.
   void validate() const;
 };

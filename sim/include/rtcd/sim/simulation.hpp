@@ -73,9 +73,10 @@ inline constexpr const char* kGimpact = "gimpact";
 
 class Simulation {
  public:
-  // backend overrides the scene's when not empty: a registered backend, or
-  // kGimpact.
-  explicit Simulation(const Scene& scene, const std::string& backend = "");
+  // backend overrides the scene's when not empty: a backend's string form
+  // (BackendOptions::parse), or kGimpact. threads > 0: the narrow phase's
+  // threads (BackendOptions::threads).
+  explicit Simulation(const Scene& scene, const std::string& backend = "", int threads = 0);
   ~Simulation();
   Simulation(const Simulation&) = delete;
   Simulation& operator=(const Simulation&) = delete;
