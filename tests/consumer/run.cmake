@@ -1,12 +1,18 @@
-# Installs rtcd into a scratch prefix, then configures, builds and runs the
-# consumer project against it.
+# Installs rtcd into a scratch prefix, checks that only the public headers
+# went there, then configures, builds and runs the consumer project against
+# the installed tree alone.
 file(REMOVE_RECURSE ${WORK_DIR})
 execute_process(COMMAND ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${WORK_DIR}/prefix RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "install failed")
 endif()
+foreach(private kernel cpu_executor.hpp step_pipeline.hpp limits.hpp criterion.hpp)
+  if(EXISTS ${WORK_DIR}/prefix/include/rtcd/${private})
+    message(FATAL_ERROR "the internal rtcd/${private} was installed")
+  endif()
+endforeach()
 execute_process(COMMAND ${CMAKE_COMMAND} -S ${SOURCE_DIR} -B ${WORK_DIR}/build -G Ninja
-                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix RESULT_VARIABLE rc)
+                        -DCMAKE_PREFIX_PATH=${WORK_DIR}/prefix -DEXAMPLES_DIR=${EXAMPLES_DIR} RESULT_VARIABLE rc)
 if(rc)
   message(FATAL_ERROR "consumer configure failed")
 endif()
@@ -18,4 +24,9 @@ execute_process(COMMAND ${WORK_DIR}/build/consumer RESULT_VARIABLE rc OUTPUT_VAR
 message("${out}")
 if(rc)
   message(FATAL_ERROR "consumer run failed")
+endif()
+execute_process(COMMAND ${WORK_DIR}/build/bullet_host ${MESH} RESULT_VARIABLE rc OUTPUT_VARIABLE out)
+message("${out}")
+if(rc)
+  message(FATAL_ERROR "the Bullet host built against the installed rtcd::sim failed")
 endif()
