@@ -10,6 +10,8 @@
 #include <fstream>
 #include <string>
 
+#include "rtcd/clock.hpp"
+
 namespace rtcd::cli {
 
 inline std::string machine() {
@@ -26,10 +28,10 @@ class Progress {
  public:
   explicit Progress(uint64_t total, std::string label = "", std::string unit = "steps")
       : total_(total), label_(std::move(label)), unit_(std::move(unit)), tty_(isatty(STDOUT_FILENO)),
-        start_(std::chrono::steady_clock::now()) {}
+        start_(Clock::now()) {}
   void update(uint64_t done) {
     if (total_ == 0) return;
-    const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double elapsed = seconds_since(start_);
     const double rate = elapsed > 0 ? double(done) / elapsed : 0;
     const double left = rate > 0 ? double(total_ - done) / rate : 0;
     const char* label = label_.c_str();
@@ -54,7 +56,7 @@ class Progress {
   std::string label_, unit_;
   bool tty_;
   double printed_ = -1e9;  // when the last plain line was printed
-  std::chrono::steady_clock::time_point start_;
+  Clock::time_point start_;
 };
 
 }  // namespace rtcd::cli

@@ -21,6 +21,7 @@
 #include <tbb/task_arena.h>
 
 #include "console.hpp"
+#include "rtcd/clock.hpp"
 #include "rtcd/sim/simulation.hpp"
 
 namespace rtcd::cli {
@@ -33,7 +34,6 @@ nlohmann::json limit_json(const std::optional<T>& value) {
 }
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 std::string timestamp() {
   const std::time_t now = std::time(nullptr);
@@ -136,7 +136,7 @@ int run_scene(const RunOptions& o) {
     std::cout << '\n';
   }
   csv.close();
-  const double wall = std::chrono::duration<double>(Clock::now() - start).count();
+  const double wall = seconds_since(start);
   const uint64_t done = simulation.steps_done();
 
   const sim::StepRecord& last = simulation.last();

@@ -3,6 +3,7 @@
 // pair-directions, then turn the executor's outcomes into contacts,
 // predictive rays, pair summaries and statistics. Every buffer keeps its
 // capacity across steps, so a steady step allocates nothing.
+#include "rtcd/clock.hpp"
 #include "rtcd/step_pipeline.hpp"
 
 #include <algorithm>
@@ -18,10 +19,6 @@
 
 namespace rtcd {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
 
 std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) + ", " + std::to_string(b) + ")"; }
 
@@ -139,7 +136,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     size_t kept = 0;
     for (size_t k = 0; k < state_keys_.size(); ++k) {
       const uint64_t key = state_keys_[k];
-      if (BodyId(key >> 32) == body || BodyId(key & 0xffffffffu) == body) continue;
+      if (const BodyPair p = pair_of_key(key); p.a == body || p.b == body) continue;
       state_keys_[kept] = key;
       if (kept != k) states_[kept] = std::move(states_[k]);
       ++kept;
@@ -235,7 +232,7 @@ void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
   const auto twice =
       std::adjacent_find(keys_.begin(), keys_.end(), [](const auto& x, const auto& y) { return x.first == y.first; });
   if (twice != keys_.end())
-    throw UsageError(pair_text(BodyId(twice->first >> 32), BodyId(twice->first & 0xffffffffu)) +
+    throw UsageError(pair_text(pair_of_key(twice->first).a, pair_of_key(twice->first).b) +
                      " appears twice in one step");
 }
 
@@ -244,7 +241,7 @@ void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out)
   // as much as a walk.
   auto lap = [last = Clock::now()]() mutable {
     const auto now = Clock::now();
-    const double seconds = std::chrono::duration<double>(now - last).count();
+    const double seconds = seconds_between(last, now);
     last = now;
     return seconds;
   };

@@ -1,4 +1,5 @@
 // `rtcd bench`: record, replay, simulate the variants, write the tables.
+#include "rtcd/clock.hpp"
 #include "rtcd/backend.hpp"
 #include "rtcd/experiments/bench.hpp"
 
@@ -29,8 +30,6 @@ std::string limit_text(const std::optional<double>& value) {
 }
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 std::string fixed(double v, int digits) {
   if (!std::isfinite(v)) return "–";

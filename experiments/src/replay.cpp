@@ -1,6 +1,7 @@
 // Lockstep replay: one pass over the recording; at each step every
 // configuration due runs on the same poses and pairs, then the exact
 // reference judges the rays of ours on the sampled steps.
+#include "rtcd/clock.hpp"
 #include "rtcd/backend.hpp"
 #include "rtcd/experiments/replay.hpp"
 
@@ -18,9 +19,6 @@
 
 namespace rtcd::experiments {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 // The shape of every kind, the ground's last.
 struct Shapes {

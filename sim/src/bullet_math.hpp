@@ -6,12 +6,10 @@
 
 #include <LinearMath/btTransform.h>
 
+#include "rtcd/clock.hpp"
 #include "rtcd/geometry.hpp"
 
 namespace rtcd::sim {
-
-using Clock = std::chrono::steady_clock;
-inline double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
 inline btVector3 bt(const Eigen::Vector3d& v) { return {btScalar(v.x()), btScalar(v.y()), btScalar(v.z())}; }
 inline Eigen::Vector3d eigen(const btVector3& v) { return {v.x(), v.y(), v.z()}; }

@@ -25,7 +25,6 @@
 namespace rtcd::sim {
 namespace {
 
-uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(std::min(a, b)) << 32) | std::max(a, b); }
 
 }  // namespace
 
@@ -51,7 +50,7 @@ void BatchDispatcher::unlink(btCollisionObject* object) {
   if (!slot) throw UsageError("unlink: the object is not linked");
   const BodyId id = slot->link.id;
   for (auto it = held_.begin(); it != held_.end();) {
-    if (BodyId(it->first >> 32) == id || BodyId(it->first & 0xffffffffu) == id) {
+    if (const BodyPair p = pair_of_key(it->first); p.a == id || p.b == id) {
       release(it->second);
       it = held_.erase(it);
     } else {

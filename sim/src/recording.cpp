@@ -17,11 +17,6 @@ static_assert(std::endian::native == std::endian::little, "recordings are little
 constexpr char kMagic[8] = {'R', 'T', 'C', 'D', 'R', 'E', 'C', '1'};
 constexpr uint32_t kStepTag = 0x50455453;  // "STEP"
 
-uint64_t key_of(const BodyPair& p) {
-  const BodyId lo = std::min(p.a, p.b), hi = std::max(p.a, p.b);
-  return uint64_t(lo) << 32 | hi;
-}
-
 template <class T>
 void put(std::ostream& out, const T& v) {
   out.write(reinterpret_cast<const char*>(&v), sizeof v);
@@ -138,8 +133,8 @@ Recording Recording::parse(std::string_view bytes, const std::string& name, cons
     for (const auto* list : {&e.left, &e.joined}) {
       if (!std::is_sorted(list->begin(), list->end())) r.fail("pairs out of order");
       for (uint64_t k : *list)
-        if ((k >> 32) >= (k & 0xffffffffu) || (k & 0xffffffffu) >= s.bodies)
-          r.fail("a pair (" + std::to_string(k >> 32) + ", " + std::to_string(k & 0xffffffffu) + ") of bodies it does not have");
+        if (const BodyPair p = pair_of_key(k); p.a >= p.b || p.b >= s.bodies)
+          r.fail("a pair (" + std::to_string(p.a) + ", " + std::to_string(p.b) + ") of bodies it does not have");
     }
     if (pair_count - e.left.size() + e.joined.size() != s.pairs)
       r.fail(std::to_string(s.pairs) + " pairs, but its changes leave " +
@@ -163,7 +158,7 @@ bool Recording::Cursor::next(RecordedFrame& frame) {
   if (keys_.size() != scratch_.size() + e.joined.size())
     throw RecordingError("step " + std::to_string(next_) + ": a pair joined that was already there");
   frame.pairs.clear();
-  for (uint64_t k : keys_) frame.pairs.push_back({BodyId(k >> 32), BodyId(k & 0xffffffffu)});
+  for (uint64_t k : keys_) frame.pairs.push_back(pair_of_key(k));
   frame.poses.resize(e.poses.size() / 7);
   for (size_t i = 0; i < frame.poses.size(); ++i) {
     const float* p = &e.poses[7 * i];
@@ -188,7 +183,7 @@ void RecordingWriter::append(const Simulation& simulation) {
   const std::vector<uint32_t> kinds = simulation.body_kinds();
   simulation.shape_poses(poses_);
   keys_.clear();
-  for (const BodyPair& p : simulation.last_pairs()) keys_.push_back(key_of(p));
+  for (const BodyPair& p : simulation.last_pairs()) keys_.push_back(pair_key(p.a, p.b));
   std::sort(keys_.begin(), keys_.end());
   keys_.erase(std::unique(keys_.begin(), keys_.end()), keys_.end());
   left_.clear();

@@ -1,4 +1,5 @@
 // Differential validation (see differential.hpp).
+#include "rtcd/clock.hpp"
 #include "rtcd/backend.hpp"
 #include "rtcd/validation/differential.hpp"
 
@@ -17,9 +18,6 @@
 
 namespace rtcd::validation {
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 // What our backend said of one ray origin.
 struct OurRay {

@@ -24,6 +24,12 @@ struct BodyPair {
   BodyId b = 0;
 };
 
+// A pair's key, the same in either order (the lower id in the high half),
+// and the pair a key stands for, lower id first: what hosts and recordings
+// keep per-pair state by.
+constexpr uint64_t pair_key(BodyId a, BodyId b) { return (uint64_t(a < b ? a : b) << 32) | (a < b ? b : a); }
+constexpr BodyPair pair_of_key(uint64_t key) { return {BodyId(key >> 32), BodyId(key & 0xffffffffu)}; }
+
 enum class Side : uint8_t { a, b };
 
 // How a walked ray's line ended (hit, behind, front, boundary, ...: see
