@@ -91,6 +91,7 @@ int run_query(const QueryOptions& o) {
 
 int main(int argc, char** argv) {
   CLI::App app{"rtcd: ray-traced narrow-phase collision detection for concave meshes"};
+  app.set_version_flag("--version", std::string("rtcd ") + RTCD_VERSION);
   app.require_subcommand(1);
 
   bool backends_json = false;
@@ -145,6 +146,7 @@ int main(int argc, char** argv) {
   run->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
   run->add_option("--out", r.out, "Output folder (default: runs/<scene>-<timestamp>/)");
   run->add_flag("--no-plots", r.no_plots, "Skip the PNG plots");
+  run->add_option("--record", r.record, "Also write the run's recording here, for rtcd replay and rtcd bench --replay");
 
   rtcd::experiments::BenchOptions bo;
   bool bench_no_plots = false;
@@ -198,6 +200,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForHelp& e) {
     return app.exit(e);
   } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
     std::cerr << "rtcd: " << e.what() << '\n';

@@ -22,6 +22,7 @@
 
 #include "console.hpp"
 #include "rtcd/clock.hpp"
+#include "rtcd/sim/recording.hpp"
 #include "rtcd/sim/simulation.hpp"
 
 namespace rtcd::cli {
@@ -69,7 +70,8 @@ void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
 }  // namespace
 
 int run_scene(const RunOptions& o) {
-  sim::Scene scene = sim::load_scene(o.scene.empty() ? RTCD_DEFAULT_SCENE : o.scene);
+  const std::string scene_path = o.scene.empty() ? RTCD_DEFAULT_SCENE : o.scene;
+  sim::Scene scene = sim::load_scene(scene_path);
   if (o.steps) {
     if (*o.steps < 1) throw UsageError("--steps must be at least 1");
     scene.steps = *o.steps;
@@ -88,6 +90,13 @@ int run_scene(const RunOptions& o) {
   csv << std::setprecision(9) << kCsvHeader << '\n';
 
   sim::Simulation simulation(scene, o.backend, o.threads);
+  std::optional<sim::RecordingWriter> recording;
+  if (!o.record.empty()) {
+    std::ifstream in(scene_path);
+    std::ostringstream text;
+    text << in.rdbuf();
+    recording.emplace(o.record, scene_path, text.str());
+  }
   for (const std::string& w : simulation.warnings()) std::cerr << "rtcd: warning: " << w << '\n';
   std::cout << "scene " << scene.name << ": " << scene.body_count() << " bodies, " << scene.steps << " steps of "
             << scene.time_step << " s, backend " << simulation.backend() << ", narrow phase on " << thread_count << " threads\n";
@@ -110,6 +119,7 @@ int run_scene(const RunOptions& o) {
   try {
     for (uint64_t i = 0; i < scene.steps; ++i) {
       const sim::StepRecord& r = simulation.step();
+      if (recording) recording->append(simulation);
       write_csv_row(csv, r);
       totals.broad += r.seconds_broad;
       totals.narrow += r.seconds_narrow;
@@ -136,6 +146,7 @@ int run_scene(const RunOptions& o) {
     std::cout << '\n';
   }
   csv.close();
+  if (recording) recording->close();  // the steps run, up to a failure
   const double wall = seconds_since(start);
   const uint64_t done = simulation.steps_done();
 

@@ -14,6 +14,7 @@ struct RunOptions {
   std::optional<uint64_t> steps;
   int threads = 0;  // 0: all
   std::string out;  // empty: runs/<scene>-<timestamp>/
+  std::string record;  // not empty: the recording `rtcd replay` and `rtcd bench --replay` read
   bool no_plots = false;
 };
 

@@ -59,6 +59,12 @@ TEST(Cli, QueryHandComputedCubesJson) {
   }
 }
 
+TEST(Cli, VersionIsThePackages) {
+  const Outcome r = run("--version");
+  EXPECT_EQ(r.code, 0);
+  EXPECT_EQ(r.out, "rtcd " RTCD_VERSION "\n");
+}
+
 TEST(Cli, QueryTableOnCommittedMeshes) {
   const Outcome r = run("query " + data + "blob_902.obj " + data + "stream_2130.obj --pose-b \"1.2 0 0 1 0 0 0\"");
   ASSERT_EQ(r.code, 0) << r.out;

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
+#include "rtcd/sim/recording.hpp"
 #include "rtcd/sim/simulation.hpp"
 #include "support_sim.hpp"
 
@@ -505,7 +506,10 @@ int run_cli(const std::string& args) {
 TEST(SimCli, RunLeavesItsOutputs) {
   const std::filesystem::path out = std::filesystem::temp_directory_path() / "rtcd_run_test";
   std::filesystem::remove_all(out);
-  ASSERT_EQ(run_cli(std::string("run ") + RTCD_DATA_DIR + "/scenes/default.json --steps 12 --out " + out.string()), 0);
+  const std::string recording = (out / "run.rtcdrec").string();
+  ASSERT_EQ(run_cli(std::string("run ") + RTCD_DATA_DIR + "/scenes/default.json --steps 12 --out " + out.string() +
+                    " --record " + recording),
+            0);
   for (const char* file : {"steps.csv", "summary.json", "time_per_step.png", "pairs_and_rays.png",
                            "interpenetration.png", "snapshot_0.png", "snapshot_11.png"})
     EXPECT_TRUE(std::filesystem::exists(out / file)) << file;
@@ -513,6 +517,11 @@ TEST(SimCli, RunLeavesItsOutputs) {
   size_t lines = 0;
   for (std::string line; std::getline(csv, line);) ++lines;
   EXPECT_EQ(lines, 13u) << "a header and a line per step";
+  // --record: the steps run, as `rtcd replay` reads them.
+  const sim::Recording r = sim::Recording::read(recording);
+  EXPECT_EQ(r.steps().size(), 12u);
+  EXPECT_EQ(r.kinds().size(), r.scene().body_count() + 1) << "the scene's bodies and the ground";
+  EXPECT_EQ(run_cli("replay " + recording + " --mode full"), 0);
 }
 
 // A simulation that blows up stops naming the step and the body, exits 1
