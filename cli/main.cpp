@@ -146,6 +146,9 @@ int main(int argc, char** argv) {
   run->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 4096));
   run->add_option("--out", r.out, "Output folder (default: runs/<scene>-<timestamp>/)");
   run->add_flag("--no-plots", r.no_plots, "Skip the PNG plots");
+  run->add_flag("--full-rays", r.full_rays,
+                "Snapshots draw each contact ray at its whole depth (default: the solver's segment, projected depth "
+                "along the normal)");
   run->add_option("--record", r.record, "Also write the run's recording here, for rtcd replay and rtcd bench --replay");
 
   rtcd::experiments::BenchOptions bo;

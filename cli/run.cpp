@@ -54,7 +54,7 @@ double peak_rss_mib() {
 constexpr const char* kCsvHeader =
     "step,time,bodies,seconds_broad,seconds_narrow,seconds_solver,seconds_effects,seconds_total,pairs,pairs_full,"
     "pairs_iterative,rays_full,rays_predictive,rays_iterative,contacts,predictive,solver_points,speculative_points,"
-    "kinetic_energy,interpenetration,deepest";
+    "kinetic_energy,interpenetration,projected_interpenetration,deepest";
 
 void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
   out << r.step << ',' << r.time << ',' << r.bodies << ',' << r.seconds_broad << ',' << r.seconds_narrow << ','
@@ -62,8 +62,8 @@ void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
       << ',' << r.pairs_iterative << ',' << r.rays_full << ',' << r.rays_predictive << ',' << r.rays_iterative << ','
       << r.contacts << ',' << r.predictive << ',' << r.solver_points << ',' << r.speculative_points << ','
       << r.kinetic_energy << ',';
-  if (r.interpenetration >= 0) out << r.interpenetration << ',' << r.deepest;
-  else out << ',';
+  if (r.interpenetration >= 0) out << r.interpenetration << ',' << r.projected << ',' << r.deepest;
+  else out << ",,";
   out << '\n';
 }
 
@@ -135,7 +135,7 @@ int run_scene(const RunOptions& o) {
         cpu_fallback = {{"step", r.step}, {"reason", r.cpu_fallback}};
       if (snapshot_at.contains(i)) {
         const fs::path png = dir / ("snapshot_" + std::to_string(i) + ".png");
-        sim::write_png(png.string(), simulation.snapshot(scene.snapshot_width, scene.snapshot_height));
+        sim::write_png(png.string(), simulation.snapshot(scene.snapshot_width, scene.snapshot_height, o.full_rays));
         pictures.push_back(png.string());
       }
       if (i + 1 == 1000) rss_at_1000 = peak_rss_mib();
@@ -215,7 +215,10 @@ int run_scene(const RunOptions& o) {
   if (rss_at_1000 >= 0) summary["totals"]["peak_rss_mib_at_1000_steps"] = rss_at_1000;
   if (last.interpenetration >= 0)
     summary["totals"]["final_interpenetration"] = {
-        {"summed_depth", last.interpenetration}, {"deepest", last.deepest}, {"pairs", last.interpenetration_pairs}};
+        {"summed_depth", last.interpenetration},
+        {"summed_projected_depth", last.projected},
+        {"deepest", last.deepest},
+        {"pairs", last.interpenetration_pairs}};
   if (!failure.empty()) summary["error"] = failure;
 
   std::vector<std::string> plots;
@@ -244,8 +247,8 @@ int run_scene(const RunOptions& o) {
               done ? totals.pairs / done : 0.0, done ? totals.rays / done : 0.0, done ? totals.contacts / done : 0.0,
               last.kinetic_energy);
   if (last.interpenetration >= 0)
-    std::printf("  interpenetration at the end: summed depth %.4g, deepest %.4g over %zu pairs\n", last.interpenetration,
-                last.deepest, last.interpenetration_pairs);
+    std::printf("  interpenetration at the end: summed depth %.4g, summed projected depth %.4g, deepest %.4g over %zu pairs\n",
+                last.interpenetration, last.projected, last.deepest, last.interpenetration_pairs);
   std::printf("  output: %s\n", dir.string().c_str());
   if (!failure.empty()) {
     std::cerr << "rtcd: " << failure << " (outputs so far kept in " << dir.string() << ")\n";

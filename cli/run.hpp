@@ -16,6 +16,7 @@ struct RunOptions {
   std::string out;  // empty: runs/<scene>-<timestamp>/
   std::string record;  // not empty: the recording `rtcd replay` and `rtcd bench --replay` read
   bool no_plots = false;
+  bool full_rays = false;  // snapshots draw whole rays, not the solver's segments
 };
 
 // Exit 0 done, 1 the simulation blew up (outputs so far kept), 2 bad input.

@@ -57,6 +57,8 @@ def main(folder: Path) -> None:
         fig, ax = plt.subplots(figsize=(8, 4.5))
         t = [float(r["time"]) for r in measured]
         ax.plot(t, [float(r["interpenetration"]) for r in measured], marker="o", label="summed ray depth")
+        ax.plot(t, [float(r["projected_interpenetration"]) for r in measured], marker="^",
+                label="summed projected depth")
         ax.plot(t, [float(r["deepest"]) for r in measured], marker="s", label="deepest (projected)")
         ax.set_xlabel("time (s)")
         ax.set_ylabel("length (m)")

@@ -463,4 +463,15 @@ void write_png(const std::string& path, const Image& image) {
   }
 }
 
+std::vector<RenderLine> contact_lines(std::span<const Contact> contacts, bool full_rays) {
+  std::vector<RenderLine> lines;
+  lines.reserve(contacts.size());
+  for (const Contact& c : contacts)
+    lines.push_back({c.origin,
+                     full_rays ? Eigen::Vector3d(c.origin + c.depth * c.direction)
+                               : Eigen::Vector3d(c.origin + c.projected_depth * c.normal),
+                     Eigen::Vector3f(0.9f, 0.1f, 0.1f)});
+  return lines;
+}
+
 }  // namespace rtcd::sim

@@ -427,12 +427,14 @@ void Simulation::Impl::measure() {
     probe->set_pose(b.id, pose_of(b.rigid->getWorldTransform()) * (k ? k->principal.inverse() : Pose{}));
   }
   const StepResult r = probe->detect(pairs);
-  double sum = 0, deepest = 0;
+  double sum = 0, projected = 0, deepest = 0;
   for (const Contact& c : r.contacts) {
     sum += c.depth;
+    projected += c.projected_depth;
     deepest = std::max(deepest, c.projected_depth);
   }
   record.interpenetration = sum;
+  record.projected = projected;
   record.deepest = deepest;
   record.interpenetration_pairs = pairs.size();
   ++counters.interpenetration_passes;
@@ -620,7 +622,7 @@ void Simulation::measure_interpenetration() {
   impl_->measure();
 }
 
-Image Simulation::snapshot(int width, int height) {
+Image Simulation::snapshot(int width, int height, bool full_rays) {
   const Impl& m = *impl_;
   ++impl_->counters.snapshots;
   std::vector<RenderMesh> meshes;
@@ -647,9 +649,7 @@ Image Simulation::snapshot(int width, int height) {
     ground.position = centre - m.scene.ground.normal * (m.scene.ground.normal.dot(centre) - m.scene.ground.height);
     instances.push_back({uint32_t(meshes.size() - 1), ground, Eigen::Vector3f(0.82f, 0.82f, 0.78f)});
   }
-  std::vector<RenderLine> lines;
-  for (const Contact& c : last_narrow_phase().contacts)
-    lines.push_back({c.origin, c.origin + c.depth * c.direction, Eigen::Vector3f(0.9f, 0.1f, 0.1f)});
+  const std::vector<RenderLine> lines = contact_lines(last_narrow_phase().contacts, full_rays);
   Camera camera = frame_camera(box);
   if (m.scene.camera_eye) camera.eye = *m.scene.camera_eye;
   if (m.scene.camera_target) camera.target = *m.scene.camera_target;

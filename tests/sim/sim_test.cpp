@@ -360,9 +360,29 @@ TEST(Sim, InterpenetrationMeasuresTheDepthThere) {
       if (!due) continue;
       EXPECT_NEAR(r.deepest, 0.05, 1e-5) << "step " << i;
       EXPECT_NEAR(r.interpenetration, 4 * 0.05 * std::sqrt(3.0), 1e-4) << "step " << i;
+      EXPECT_NEAR(r.projected, 4 * 0.05, 1e-4) << "step " << i << ": each corner 0.05 along the ground's normal";
     }
     EXPECT_EQ(s.counters().interpenetration_passes, listed ? 3u : 0u);
   }
+}
+
+// Snapshots draw a contact as the solver sees it: from each sunk corner
+// 0.05 up the ground's normal, not along the 0.05 √3 diagonal ray that the
+// full-ray drawing shows.
+TEST(Sim, SnapshotsDrawTheSolversSegment) {
+  Simulation s(scene_from(R"({"steps": 1, "effects": ["contacts"],
+    "bodies": [{"box": [0.25, 0.25, 0.25], "pose": {"position": [0, 0, 0.2]}}]})"));
+  s.step();
+  const std::span<const Contact> contacts = s.last_narrow_phase().contacts;
+  ASSERT_EQ(contacts.size(), 4u);
+  const auto segments = sim::contact_lines(contacts), rays = sim::contact_lines(contacts, true);
+  ASSERT_EQ(segments.size(), 4u);
+  for (size_t i = 0; i < 4; ++i) {
+    EXPECT_LT((segments[i].from - contacts[i].origin).norm(), 1e-12);
+    EXPECT_LT((segments[i].to - segments[i].from - Eigen::Vector3d(0, 0, 0.05)).norm(), 1e-5) << "contact " << i;
+    EXPECT_NEAR((rays[i].to - rays[i].from).norm(), 0.05 * std::sqrt(3.0), 1e-5) << "contact " << i;
+  }
+  EXPECT_GT(s.snapshot(64, 48).rgb.size(), 0u);
 }
 
 // Speculative contacts stop nothing that is not approaching: a box gliding

@@ -12,6 +12,7 @@
 #include <Eigen/Core>
 
 #include "rtcd/geometry.hpp"
+#include "rtcd/results.hpp"
 
 namespace rtcd::sim {
 
@@ -34,6 +35,11 @@ struct RenderLine {
   Eigen::Vector3d from, to;
   Eigen::Vector3f color{1, 0, 0};
 };
+
+// Contacts as red lines: each the segment a solver sees, from the contact
+// point along the normal by the projected depth; or, with `full_rays`, the
+// whole ray, along its direction by its depth (a grazing ray is long).
+std::vector<RenderLine> contact_lines(std::span<const Contact> contacts, bool full_rays = false);
 
 // Perspective pinhole camera; fov_degrees is the vertical field of view.
 struct Camera {

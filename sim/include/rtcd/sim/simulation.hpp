@@ -48,7 +48,8 @@ struct StepRecord {
   std::string cpu_fallback;         // why the step's rays ran on the CPU instead of the devices; empty: they did not
   double kinetic_energy = 0;
   // Set on the steps the interpenetration pass ran (else negative).
-  double interpenetration = -1;  // summed depth of every penetrating ray
+  double interpenetration = -1;  // summed depth of every penetrating ray (the thesis' figure)
+  double projected = -1;         // summed projected depth: what the solver is asked to undo
   double deepest = -1;           // the largest single depth, projected
   size_t interpenetration_pairs = 0;
 };
@@ -109,8 +110,11 @@ class Simulation {
   // Warnings met while loading (self-intersecting meshes), one line each.
   const std::vector<std::string>& warnings() const;
 
-  // The scene now, drawn with the last step's contact rays (the snapshots stage).
-  Image snapshot(int width, int height);
+  // The scene now, drawn with the last step's contacts (the snapshots
+  // stage): each as the segment a solver sees, from the point along the
+  // contact normal by its projected depth; or, with `full_rays`, each ray
+  // along its direction by its whole depth (grazing rays are long).
+  Image snapshot(int width, int height, bool full_rays = false);
 
   // Runs the interpenetration pass now (also on the steps the scene asks
   // for); fills the last record's interpenetration fields.
