@@ -1,6 +1,7 @@
 // Shape specs, poses and pose sequences from the command line.
 #include "inputs.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -50,12 +51,7 @@ Pose pose_from(const std::vector<double>& v, const std::string& what) {
 }  // namespace
 
 void Knobs::apply(Config& c) const {
-  if (no_predictive) c.predictive = false;
-  if (no_verify_walks) c.verify_walks = false;
-  if (no_edge_contacts) c.edge_contacts = false;
-  if (max_walk_steps) c.max_walk_steps = max_walk_steps;
-  if (displacement_threshold) c.displacement_threshold = displacement_threshold;
-  if (distance_extension) c.distance_extension = distance_extension;
+  for (const auto& [knob, value] : set) knob->set(c, value);
 }
 
 Config Knobs::config() const {
@@ -65,17 +61,27 @@ Config Knobs::config() const {
 }
 
 void add_knobs(CLI::App& command, Knobs& k) {
-  command.add_flag("--no-predictive", k.no_predictive, "Do not cast predictive rays");
-  command.add_flag("--no-verify-walks", k.no_verify_walks,
-                   "Trust walked contacts without the fold check (faster; concave targets may report a vertex "
-                   "in a fold as inside)");
-  command.add_flag("--no-edge-contacts", k.no_edge_contacts,
-                   "Do not test edges (faster; surfaces crossing with no vertex inside are not seen)");
-  command.add_option("--max-walk-steps", k.max_walk_steps, "Walk step limit [1, 1000000] (default: derived per pair)");
-  command.add_option("--displacement-threshold", k.displacement_threshold,
-                     "Equation 2.1 threshold (default: derived per pair)");
-  command.add_option("--distance-extension", k.distance_extension,
-                     "Predictive range and bounding-box growth (default: derived per pair)");
+  for (const Knob& knob : knobs()) {
+    std::string option = knob.name;
+    std::replace(option.begin(), option.end(), '_', '-');
+    const std::string help = std::string(knob.meaning) + ". Cost: " + knob.cost;
+    switch (knob.type) {
+      case KnobType::flag:
+        command.add_flag_callback("--no-" + option, [&k, &knob] { k.set.push_back({&knob, false}); },
+                                  "Off: " + help + " (default: on)");
+        break;
+      case KnobType::count:
+      case KnobType::length:
+        // The range is Config::validate's to hold, with the knob's name.
+        command.add_option_function<double>(
+            "--" + option, [&k, &knob](double v) { k.set.push_back({&knob, v}); },
+            help + " " + to_string(KnobValue(knob.min)) + " .. " + to_string(KnobValue(knob.max)) + " (default: " +
+                knob.unset + ")");
+        break;
+      case KnobType::mode:
+        break;  // each command's own --mode
+    }
+  }
 }
 
 void warn_if_self_intersecting(const Shape& shape, const std::string& name) {

@@ -15,15 +15,12 @@ class App;
 
 namespace rtcd::cli {
 
-// The accuracy knobs every subcommand that runs the narrow phase takes.
+// The accuracy knobs every subcommand that runs the narrow phase takes,
+// one option per entry of rtcd::knobs() (the mode excepted: each command
+// has its own --mode): --NAME for numbers, --no-NAME for switches that
+// default on. Holds what the command line set, in order.
 struct Knobs {
-  bool no_predictive = false;
-  bool no_verify_walks = false;
-  bool no_edge_contacts = false;
-  // Unset: derived per pair (rtcd/limits.hpp).
-  std::optional<uint32_t> max_walk_steps;
-  std::optional<double> displacement_threshold;
-  std::optional<double> distance_extension;
+  std::vector<std::pair<const Knob*, KnobValue>> set;
   void apply(Config& config) const;  // sets what these knobs set, leaves the rest
   Config config() const;             // the default Config with these knobs set
 };

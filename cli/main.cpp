@@ -9,6 +9,7 @@
 #include "bench.hpp"
 #include "check.hpp"
 #include "inputs.hpp"
+#include "knobs.hpp"
 #include "replay.hpp"
 #include "report.hpp"
 #include "run.hpp"
@@ -97,6 +98,7 @@ int main(int argc, char** argv) {
   bool backends_json = false;
   auto* backends = app.add_subcommand("backends", "List the backends built into rtcd and their devices");
   backends->add_flag("--json", backends_json, "Print JSON");
+  auto* knobs = app.add_subcommand("knobs", "The narrow phase's knobs (range, default, meaning, cost) and step counters, as Markdown");
 
   QueryOptions q;
   auto* query = app.add_subcommand("query", "Detect the contacts between two shapes");
@@ -183,6 +185,10 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
     if (*backends) return run_backends(backends_json);
+    if (*knobs) {
+      rtcd::cli::print_knobs(std::cout);
+      return 0;
+    }
     if (*bench) {
       bo.command = "rtcd";
       for (int i = 1; i < argc; ++i) bo.command += std::string(" ") + argv[i];

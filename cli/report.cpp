@@ -23,23 +23,10 @@ nlohmann::json stats_json(const StepStats& s) {
   for (int i = 0; i < kLineStatusCount; ++i) endings[line_status_name(i)] = s.walk_endings[i];
   nlohmann::json devices = nlohmann::json::array();
   for (const DeviceWork& d : s.devices) devices.push_back({{"jobs", d.jobs}, {"rays", d.rays}});
-  return {{"pairs_full", s.pairs_full},
+  nlohmann::json j = {{"pairs_full", s.pairs_full},
           {"pairs_iterative", s.pairs_iterative},
           {"fallbacks_to_full", s.fallbacks_to_full},
-          {"candidates", s.candidates},
-          {"rays_full", s.rays_full},
-          {"rays_predictive", s.rays_predictive},
-          {"rays_iterative", s.rays_iterative},
-          {"walk_steps", s.walk_steps},
           {"walk_endings", endings},
-          {"nearest_queries", s.nearest_queries},
-          {"rays_retraced", s.rays_retraced},
-          {"rays_watched", s.rays_watched},
-          {"fold_casts", s.fold_casts},
-          {"edges_tested", s.edges_tested},
-          {"edges_skipped", s.edges_skipped},
-          {"edge_rays", s.edge_rays},
-          {"edge_contacts", s.edge_contacts},
           {"bytes_to_device", s.bytes_to_device},
           {"bytes_from_device", s.bytes_from_device},
           {"devices", devices},
@@ -48,6 +35,8 @@ nlohmann::json stats_json(const StepStats& s) {
                        {"full", s.seconds_full},
                        {"iterative", s.seconds_iterative},
                        {"gather", s.seconds_gather}}}};
+  for (const RayCounter& c : kRayCounters) j[c.name] = s.*c.field;
+  return j;
 }
 
 }  // namespace

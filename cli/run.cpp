@@ -22,17 +22,12 @@
 
 #include "console.hpp"
 #include "rtcd/clock.hpp"
+#include "rtcd/knobs_json.hpp"
 #include "rtcd/sim/recording.hpp"
 #include "rtcd/sim/simulation.hpp"
 
 namespace rtcd::cli {
 namespace {
-
-// A limit the scene sets, or "derived" (per pair, rtcd/limits.hpp).
-template <class T>
-nlohmann::json limit_json(const std::optional<T>& value) {
-  return value ? nlohmann::json(*value) : nlohmann::json("derived");
-}
 
 namespace fs = std::filesystem;
 
@@ -164,14 +159,7 @@ int run_scene(const RunOptions& o) {
         {"seed", scene.seed},
         {"sleeping", scene.sleeping},
         {"gravity", {scene.gravity.x(), scene.gravity.y(), scene.gravity.z()}},
-        {"mode", to_string(scene.narrow.mode)},
-        {"predictive", scene.narrow.predictive},
-        {"projected", scene.narrow.projected},
-        {"verify_walks", scene.narrow.verify_walks},
-        {"edge_contacts", scene.narrow.edge_contacts},
-        {"max_walk_steps", limit_json(scene.narrow.max_walk_steps)},
-        {"displacement_threshold", limit_json(scene.narrow.displacement_threshold)},
-        {"distance_extension", limit_json(scene.narrow.distance_extension)},
+        {"knobs", knobs_json(scene.narrow)},
         {"points_per_pair", scene.points_per_pair},
         {"solver_iterations", scene.solver_iterations},
         {"interpenetration_every", scene.interpenetration_every}}},

@@ -99,56 +99,14 @@ double max_displacement(const Pose& relative_at_full_step, const Pose& relative_
          rotation_angle(relative_at_full_step.orientation, relative_now.orientation) * max_radius;
 }
 
-const char* to_string(Mode mode) {
-  switch (mode) {
-    case Mode::full: return "full";
-    case Mode::iterative: return "iterative";
-    case Mode::automatic: return "auto";
-  }
-  return "?";
-}
-
-Mode parse_mode(const std::string& text) {
-  if (text == "full") return Mode::full;
-  if (text == "iterative") return Mode::iterative;
-  if (text == "auto") return Mode::automatic;
-  throw ConfigError("unknown mode '" + text + "' (expected full, iterative or auto)");
-}
-
-void Config::validate() const {
-  auto fail = [](const std::string& what) { throw ConfigError(what); };
-  if (max_walk_steps && (*max_walk_steps < 1 || *max_walk_steps > 1'000'000))
-    fail("max_walk_steps = " + std::to_string(*max_walk_steps) + " is outside [1, 1000000]");
-  if (distance_extension && (!std::isfinite(*distance_extension) || *distance_extension < 0 || *distance_extension >= 1e30))
-    fail("distance_extension = " + std::to_string(*distance_extension) + " is outside [0, 1e30)");
-  if (displacement_threshold && (!std::isfinite(*displacement_threshold) || *displacement_threshold < 0))
-    fail("displacement_threshold = " + std::to_string(*displacement_threshold) + " must be finite and >= 0");
-  if (displacement_threshold && distance_extension && *displacement_threshold > *distance_extension)
-    fail("displacement_threshold (" + std::to_string(*displacement_threshold) +
-         ") must not exceed distance_extension (" + std::to_string(*distance_extension) +
-         "): predictive rays only cover motions up to distance_extension");
-}
-
 const char* to_string(PairMode mode) { return mode == PairMode::full ? "full" : "iterative"; }
 const char* to_string(ContactKind kind) {
   return kind == ContactKind::vertex ? "vertex" : kind == ContactKind::edge ? "edge" : "sphere";
 }
 
 RayCounts& RayCounts::operator+=(const RayCounts& o) {
-  candidates += o.candidates;
-  rays_full += o.rays_full;
-  rays_predictive += o.rays_predictive;
-  rays_iterative += o.rays_iterative;
-  walk_steps += o.walk_steps;
-  nearest_queries += o.nearest_queries;
-  rays_retraced += o.rays_retraced;
-  rays_watched += o.rays_watched;
-  fold_casts += o.fold_casts;
-  edges_tested += o.edges_tested;
-  edges_skipped += o.edges_skipped;
-  edge_rays += o.edge_rays;
-  edge_contacts += o.edge_contacts;
-  for (int e = 0; e < RTCD_LINE_STATUS_COUNT; ++e) walk_endings[e] += o.walk_endings[e];
+  for (const RayCounter& c : kRayCounters) this->*c.field += o.*c.field;
+  for (int e = 0; e < kLineStatusCount; ++e) walk_endings[e] += o.walk_endings[e];
   return *this;
 }
 

@@ -3,7 +3,6 @@
 // pair-directions, then turn the executor's outcomes into contacts,
 // predictive rays, pair summaries and statistics. Every buffer keeps its
 // capacity across steps, so a steady step allocates nothing.
-#include "rtcd/clock.hpp"
 #include "rtcd/step_pipeline.hpp"
 
 #include <algorithm>
@@ -13,6 +12,7 @@
 #include <tbb/task_arena.h>
 
 #include "parallel.hpp"
+#include "rtcd/clock.hpp"
 #include "rtcd/criterion.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/kernel/classify.h"

@@ -1,6 +1,4 @@
 // `rtcd bench`: record, replay, simulate the variants, write the tables.
-#include "rtcd/clock.hpp"
-#include "rtcd/backend.hpp"
 #include "rtcd/experiments/bench.hpp"
 
 #include <algorithm>
@@ -15,6 +13,8 @@
 
 #include <tbb/task_arena.h>
 
+#include "rtcd/backend.hpp"
+#include "rtcd/clock.hpp"
 #include "rtcd/experiments/replay.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/sim/simulation.hpp"

@@ -1,8 +1,6 @@
 // Lockstep replay: one pass over the recording; at each step every
 // configuration due runs on the same poses and pairs, then the exact
 // reference judges the rays of ours on the sampled steps.
-#include "rtcd/clock.hpp"
-#include "rtcd/backend.hpp"
 #include "rtcd/experiments/replay.hpp"
 
 #include <algorithm>
@@ -13,6 +11,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "rtcd/backend.hpp"
+#include "rtcd/clock.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/oracle/exact.hpp"
 #include "rtcd/oracle/third_party.hpp"

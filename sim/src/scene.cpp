@@ -297,28 +297,44 @@ Scene parse_scene(std::string_view json_text, const std::string& path, const Sce
 
   Object np = root.object("narrow_phase");
   s.backend = np.string("backend", "auto");
-  for (const char* owned : {"predictive", "projected"})
-    if (np.has(owned))
-      np.fail(np.key(owned), std::string("conflicts with effects: list \"") + owned +
-                                 "\" in effects (the one place that turns it on) and remove narrow_phase." + owned);
-  const std::string mode = np.string("mode", "auto");
-  try {
-    s.narrow.mode = parse_mode(mode);
-  } catch (const Error&) {
-    np.fail(np.key("mode"), "is \"" + mode + "\", must be full, iterative or auto");
+  // The knobs by the table (config.hpp); those the effects list owns are
+  // set from it, and a narrow_phase key for them is an error.
+  for (const Knob& knob : knobs()) {
+    const std::string name = knob.name;
+    if (knob.effect) {
+      if (np.has(name))
+        np.fail(np.key(name), "conflicts with effects: list \"" + name +
+                                  "\" in effects (the one place that turns it on) and remove narrow_phase." + name);
+      const std::optional<Effect> effect = parse_effect(name);
+      knob.set(s.narrow, s.has(*effect));
+      continue;
+    }
+    switch (knob.type) {
+      case KnobType::flag:
+        knob.set(s.narrow, np.boolean(name, std::get<bool>(knob.get(s.narrow))));
+        break;
+      case KnobType::count:  // left out: derived per pair (rtcd/limits.hpp)
+        if (np.has(name)) knob.set(s.narrow, double(np.integer(name, 0, uint64_t(knob.min), uint64_t(knob.max))));
+        break;
+      case KnobType::length:
+        if (np.has(name)) knob.set(s.narrow, np.number(name, 0.0, knob.min, knob.max));
+        break;
+      case KnobType::mode: {
+        const std::string mode = np.string(name, to_string(s.narrow.mode));
+        try {
+          knob.set(s.narrow, parse_mode(mode));
+        } catch (const Error&) {
+          np.fail(np.key(name), "is \"" + mode + "\", must be full, iterative or auto");
+        }
+        break;
+      }
+    }
   }
-  // Limits the scene leaves out follow it per pair (rtcd/limits.hpp).
-  if (np.has("max_walk_steps")) s.narrow.max_walk_steps = uint32_t(np.integer("max_walk_steps", 0, 1, 1'000'000));
-  if (np.has("distance_extension")) s.narrow.distance_extension = np.number("distance_extension", 0.0, 0.0, 1e6);
-  if (np.has("displacement_threshold"))
-    s.narrow.displacement_threshold = np.number("displacement_threshold", 0.0, 0.0, 1e6);
-  if (s.narrow.displacement_threshold && s.narrow.distance_extension &&
-      *s.narrow.displacement_threshold > *s.narrow.distance_extension)
-    np.fail(np.key("displacement_threshold"), "must not exceed narrow_phase.distance_extension");
-  s.narrow.predictive = s.has(Effect::predictive);
-  s.narrow.projected = s.has(Effect::projected);
-  s.narrow.verify_walks = np.boolean("verify_walks", s.narrow.verify_walks);
-  s.narrow.edge_contacts = np.boolean("edge_contacts", s.narrow.edge_contacts);
+  try {
+    s.narrow.validate();  // the rules between knobs
+  } catch (const ConfigError& e) {
+    np.fail(np.key("displacement_threshold"), e.what());
+  }
   s.points_per_pair = uint32_t(np.integer("points_per_pair", s.points_per_pair, 1, 64));
   np.finish();
 

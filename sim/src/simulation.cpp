@@ -1,7 +1,5 @@
 // The simulation host: a Bullet world whose collision step is rtcd's batch
 // dispatcher, stages assembled from the scene's effects.
-#include "rtcd/backend.hpp"
-#include "rtcd/limits.hpp"
 #include "rtcd/sim/simulation.hpp"
 
 #include <cmath>
@@ -13,9 +11,11 @@
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
 #include <BulletCollision/Gimpact/btGImpactShape.h>
 
+#include "bullet_math.hpp"
+#include "rtcd/backend.hpp"
+#include "rtcd/limits.hpp"
 #include "rtcd/mesh_check.hpp"
 #include "rtcd/mesh_gen.hpp"
-#include "bullet_math.hpp"
 #include "rtcd/sim/dispatcher.hpp"
 #include "rtcd/sim/mass.hpp"
 

@@ -59,6 +59,22 @@ TEST(Cli, QueryHandComputedCubesJson) {
   }
 }
 
+// docs/knobs.md holds `rtcd knobs` as it prints: the table is the one
+// source, and the docs fail here when they disagree with it.
+TEST(Cli, KnobsDocIsTheTable) {
+  const Outcome r = run("knobs");
+  ASSERT_EQ(r.code, 0);
+  std::ifstream file(RTCD_DATA_DIR "/../docs/knobs.md");
+  std::stringstream text;
+  text << file.rdbuf();
+  const std::string doc = text.str(), begin = "<!-- rtcd knobs:begin -->\n", end = "<!-- rtcd knobs:end -->";
+  const size_t from = doc.find(begin), to = doc.find(end);
+  ASSERT_NE(from, std::string::npos);
+  ASSERT_NE(to, std::string::npos);
+  EXPECT_EQ(doc.substr(from + begin.size(), to - from - begin.size()), r.out)
+      << "docs/knobs.md disagrees with the table: regenerate it from `rtcd knobs`";
+}
+
 TEST(Cli, VersionIsThePackages) {
   const Outcome r = run("--version");
   EXPECT_EQ(r.code, 0);

@@ -70,3 +70,48 @@ TEST(Pose, CheckedRejectsNonFiniteAndNonUnit) {
 }
 
 }  // namespace
+
+// The table is the configuration: every knob reads and writes its field,
+// and validate() holds each number to the table's range, naming the knob.
+TEST(Config, EveryKnobOfTheTable) {
+  ASSERT_EQ(rtcd::knobs().size(), 8u) << "a Config field without a knob, or a knob without a field";
+  for (const rtcd::Knob& k : rtcd::knobs()) {
+    SCOPED_TRACE(k.name);
+    EXPECT_EQ(rtcd::find_knob(k.name), &k);
+    rtcd::Config c;
+    switch (k.type) {
+      case rtcd::KnobType::flag:
+        EXPECT_EQ(std::get<bool>(k.get(c)), true) << "switches default on";
+        k.set(c, false);
+        EXPECT_EQ(std::get<bool>(k.get(c)), false);
+        EXPECT_THROW(k.set(c, 1.0), rtcd::ConfigError);
+        break;
+      case rtcd::KnobType::count:
+      case rtcd::KnobType::length:
+        EXPECT_TRUE(std::holds_alternative<std::monostate>(k.get(c))) << "limits default to derived";
+        k.set(c, k.max);
+        EXPECT_EQ(std::get<double>(k.get(c)), k.max);
+        EXPECT_NO_THROW(c.validate());
+        c = {};
+        k.set(c, k.type == rtcd::KnobType::count ? k.max + 1 : k.max * 2);
+        try {
+          c.validate();
+          ADD_FAILURE() << "above the range";
+        } catch (const rtcd::ConfigError& e) {
+          EXPECT_EQ(std::string(e.what()).rfind(k.name, 0), 0u) << e.what();
+        }
+        c = {};
+        if (k.type == rtcd::KnobType::count) EXPECT_THROW(k.set(c, 2.5), rtcd::ConfigError);
+        k.set(c, rtcd::KnobValue());
+        EXPECT_TRUE(std::holds_alternative<std::monostate>(k.get(c)));
+        break;
+      case rtcd::KnobType::mode:
+        EXPECT_EQ(std::get<rtcd::Mode>(k.get(c)), rtcd::Mode::automatic);
+        k.set(c, rtcd::Mode::full);
+        EXPECT_EQ(c.mode, rtcd::Mode::full);
+        break;
+    }
+  }
+  EXPECT_EQ(rtcd::find_knob("warp_speed"), nullptr);
+  EXPECT_EQ(rtcd::to_string(rtcd::KnobValue()), "derived per pair");
+}

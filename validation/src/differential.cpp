@@ -1,6 +1,4 @@
 // Differential validation (see differential.hpp).
-#include "rtcd/clock.hpp"
-#include "rtcd/backend.hpp"
 #include "rtcd/validation/differential.hpp"
 
 #include <algorithm>
@@ -11,7 +9,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "rtcd/backend.hpp"
+#include "rtcd/clock.hpp"
 #include "rtcd/error.hpp"
+#include "rtcd/knobs_json.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/oracle/exact.hpp"
 #include "rtcd/oracle/third_party.hpp"
@@ -90,6 +91,7 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   Summary& s = result.summary;
   s.family = family.name;
   s.mode = options.mode;
+  s.config = config;
   s.pairs = options.pairs;
   s.seed = options.seed;
   s.epsilon = epsilon;
@@ -279,6 +281,7 @@ nlohmann::json to_json(const Summary& s) {
   return {{"family", s.family},
           {"backend", s.backend},
           {"mode", to_string(s.mode)},
+          {"knobs", knobs_json(s.config)},
           {"pairs", s.pairs},
           {"seed", s.seed},
           {"epsilon", s.epsilon},

@@ -1,10 +1,14 @@
-// The accuracy/time knobs of the narrow phase. Every one trades accuracy
-// for time; each says its range, default and cost.
+// The accuracy/time knobs of the narrow phase, and their one table: the
+// configuration is validated from it, and the CLI options, the scene keys,
+// the JSON output and docs/knobs.md are made from it.
 #pragma once
 
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
+#include <string_view>
+#include <variant>
 
 namespace rtcd {
 
@@ -75,8 +79,43 @@ struct Config {
   // Full, iterative or automatic (default).
   Mode mode = Mode::automatic;
 
-  // Throws ConfigError naming the field and its allowed range.
+  // Throws ConfigError naming the knob and its allowed range (knobs()),
+  // or the two knobs that contradict each other.
   void validate() const;
 };
+
+// A knob's value as the table reads and writes it: unset (derived per
+// pair), a switch, a number, or the mode.
+using KnobValue = std::variant<std::monostate, bool, double, Mode>;
+
+enum class KnobType : uint8_t {
+  flag,    // on or off
+  count,   // a whole number in [min, max], or unset: derived per pair
+  length,  // a length in [min, max], or unset: derived per pair
+  mode,    // full, iterative or auto
+};
+
+struct Knob {
+  const char* name;  // the Config field, the scene's narrow_phase key, the JSON key
+  KnobType type;
+  double min, max;      // count, length: the closed range of a value set
+  const char* unset;    // the default, in words ("derived per pair", "on", "auto")
+  const char* meaning;  // one line
+  const char* cost;     // one line
+  // Set by the scene's effects list instead of a narrow_phase key (the one
+  // place that turns it on): predictive, projected.
+  bool effect;
+  KnobValue (*get)(const Config&);
+  // Throws ConfigError for a value of the wrong kind; ranges are
+  // Config::validate's.
+  void (*set)(Config&, const KnobValue&);
+};
+
+// Every knob, in Config's order.
+std::span<const Knob> knobs();
+// nullptr for a name not in the table.
+const Knob* find_knob(std::string_view name);
+// "derived per pair", "on", "off", "0.05", "auto".
+std::string to_string(const KnobValue& value);
 
 }  // namespace rtcd

@@ -93,24 +93,49 @@ struct PairResult {
 };
 
 // The step's rays by what they did: summed per job by the executors
-// (RayTally) and per step by the pipeline.
+// (RayTally) and per step by the pipeline. What each counts is in
+// kRayCounters, the one table the sums, the JSON and docs/knobs.md read.
 struct RayCounts {
-  size_t candidates = 0;       // ray origins inside the grown bounding-box overlap
-  size_t rays_full = 0;        // inward rays traced in full steps
-  size_t rays_predictive = 0;  // outward predictive rays traced (full steps and re-traces)
-  size_t rays_iterative = 0;   // tracked rays walked in iterative steps
-  size_t walk_steps = 0;       // triangles located by all walks
-  size_t nearest_queries = 0;  // nearest-triangle queries: vertices neither ray met, edges watched near the target
-  size_t rays_retraced = 0;    // walked rays whose walks could not tell inside from outside, traced again
-  size_t rays_watched = 0;     // tracked rays that reported nothing (vertices and edges near the target)
-  size_t fold_casts = 0;       // walked contacts whose fold check cast a ray (beyond their face's clearance)
-  size_t edges_tested = 0;     // edges (and spheres' deepest points) taken for a crossing test (Config::edge_contacts)
-  size_t edges_skipped = 0;    // of those, watched edges still farther from the surface than the pair has moved
-  size_t edge_rays = 0;        // rays those tests cast
-  size_t edge_contacts = 0;    // edges that cross the target with neither end inside
-  std::array<size_t, kLineStatusCount> walk_endings{};  // iterative rays by rtcd_line_status
+  size_t candidates{}, rays_full{}, rays_predictive{}, rays_iterative{}, walk_steps{};
+  size_t nearest_queries{}, rays_retraced{}, rays_watched{}, fold_casts{};
+  size_t edges_tested{}, edges_skipped{}, edge_rays{}, edge_contacts{};
+  std::array<size_t, kLineStatusCount> walk_endings{};  // iterative rays by how their line ended (line_status_name)
 
   RayCounts& operator+=(const RayCounts& other);
+};
+
+struct RayCounter {
+  const char* name;
+  size_t RayCounts::*field;
+  const char* meaning;
+};
+inline constexpr RayCounter kRayCounters[] = {
+    {"candidates", &RayCounts::candidates,
+     "ray origins inside the grown bounding-box overlap"},
+    {"rays_full", &RayCounts::rays_full,
+     "inward rays traced in full steps"},
+    {"rays_predictive", &RayCounts::rays_predictive,
+     "outward predictive rays traced (full steps and re-traces)"},
+    {"rays_iterative", &RayCounts::rays_iterative,
+     "tracked rays walked in iterative steps"},
+    {"walk_steps", &RayCounts::walk_steps,
+     "triangles located by all walks"},
+    {"nearest_queries", &RayCounts::nearest_queries,
+     "nearest-triangle queries: vertices neither ray met, edges watched near the target"},
+    {"rays_retraced", &RayCounts::rays_retraced,
+     "walked rays whose walks could not tell inside from outside, traced again"},
+    {"rays_watched", &RayCounts::rays_watched,
+     "tracked rays that reported nothing (vertices and edges near the target)"},
+    {"fold_casts", &RayCounts::fold_casts,
+     "walked contacts whose fold check cast a ray (beyond their face's clearance)"},
+    {"edges_tested", &RayCounts::edges_tested,
+     "edges (and spheres' deepest points) taken for a crossing test (Config::edge_contacts)"},
+    {"edges_skipped", &RayCounts::edges_skipped,
+     "of those, watched edges still farther from the surface than the pair has moved"},
+    {"edge_rays", &RayCounts::edge_rays,
+     "rays those tests cast"},
+    {"edge_contacts", &RayCounts::edge_contacts,
+     "edges that cross the target with neither end inside"},
 };
 
 // One device's share of a step's rays (OpenCL backends).

@@ -71,6 +71,7 @@ struct PairMetrics {
 struct Summary {
   std::string family, backend;
   RunMode mode = RunMode::full;
+  Config config;  // the knobs the backend ran with
   size_t pairs = 0;
   uint64_t seed = 0;
   double epsilon = 0.0;
