@@ -150,11 +150,15 @@ class OpenClExecutor final : public RayExecutor {
     }
   }
 
-  Transfers execute(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
-                    std::span<RayTally> tallies) override {
+  void configure(const Config& config) override {
+    config_ = config;
+    if (cpu_) cpu_->configure(config);
+  }
+
+  Transfers execute(RayBatch& batch) override {
     if (fault_message_.empty()) {
       try {
-        return run(jobs, config, outcomes, tallies);
+        return run(batch.jobs, config_, batch.outcomes, batch.tallies);
       } catch (const cl::Error& e) {
         fail(describe(e) + " during a step");
       } catch (const Error& e) {
@@ -162,7 +166,7 @@ class OpenClExecutor final : public RayExecutor {
       }
     }
     on_cpu_ = true;
-    return cpu().execute(jobs, config, outcomes, tallies);
+    return cpu().execute(batch);
   }
 
   void account(StepStats& stats) const override {
@@ -193,6 +197,7 @@ class OpenClExecutor final : public RayExecutor {
   RayExecutor& cpu() {
     if (!cpu_) {
       cpu_ = make_cpu_executor(fallback_.tracers());
+      cpu_->configure(config_);
       for (const auto& shape : shapes_) cpu_->add_shape(shape);
     }
     return *cpu_;
@@ -647,6 +652,7 @@ class OpenClExecutor final : public RayExecutor {
   ShapeData data_;
   std::vector<Device> devices_;
   std::unique_ptr<RayExecutor> cpu_;
+  Config config_;
   uint64_t batches_ = 0;  // batches with rays
   uint64_t step_ = 0;     // begin_step calls
   bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback

@@ -111,14 +111,18 @@ class CpuExecutor final : public RayExecutor {
     shapes_.push_back(std::move(shape));
   }
 
-  Transfers execute(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
-                    std::span<RayTally> tallies) override {
+  void configure(const Config& config) override { config_ = config; }
+
+  Transfers execute(RayBatch& batch) override {
+    const std::span<const RayJob> jobs = batch.jobs;
+    const std::span<std::vector<RayOutcome>> outcomes = batch.outcomes;
+    const std::span<RayTally> tallies = batch.tallies;
+    const Config& config = config_;
     if (candidates_.size() < jobs.size()) candidates_.resize(jobs.size());
     if (params_.size() < jobs.size()) params_.resize(jobs.size());
     size_t work = 0;
     for (const RayJob& job : jobs) work += job.iterative ? job.tracked.size() : shapes_[job.source]->sources().item_count();
-    const bool walks = !jobs.empty() && jobs.front().iterative;  // the pipeline never mixes modes in a batch
-    if (walks) {
+    if (batch.iterative) {
       // Walks are short and even: one pass per job, each tracked ray placed
       // and walked at once.
       for_each_index(jobs.size(), work >= kParallelItems, [&](size_t j) {
@@ -254,6 +258,7 @@ class CpuExecutor final : public RayExecutor {
   }
 
   std::unique_ptr<MeshTracerFactory> factory_;
+  Config config_;
   std::vector<std::shared_ptr<const Shape>> shapes_;
   std::vector<std::unique_ptr<MeshTracer>> tracers_;    // null for volumes
   std::vector<std::vector<rtcd_candidate>> candidates_;  // per job slot; only grows

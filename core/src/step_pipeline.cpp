@@ -113,6 +113,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
         executor_(std::move(executor)),
         derive_(derives_limits(config_)) {
     if (threads > 0) arena_.emplace(threads);
+    executor_->configure(config_);
   }
 
   std::string name() const override { return name_; }
@@ -170,19 +171,26 @@ class PipelineNarrowPhase final : public NarrowPhase {
     Pose previous;      // the pose at the last step the body was in a pair,
     uint64_t seen = 0;  // that step (0: never): motions are measured between consecutive steps
   };
+  // A pair's state is kept by id order, whatever order the host names the
+  // pair in: direction 0 is the lower id's rays into the higher, 1 the reverse.
+  static int direction(BodyId source, BodyId target) { return source < target ? 0 : 1; }
   struct PairState {
     Pose relative_at_full;               // lower id's frame in the higher id's frame
-    std::vector<RayOutcome> tracked[2];  // last kept outcomes; [0]: lower id's rays into the higher, [1]: the reverse
-    Residence residence[2];              // where the executor keeps them, in the same order
+    std::vector<RayOutcome> tracked[2];  // last kept outcomes, by direction
+    Residence residence[2];              // where the executor keeps them, by direction
   };
-  // A pair's step: its state and limits, and where its two jobs are:
-  // jobs_[list][first] (a's rays), [first + 1] (b's).
+  // The step's two batches (Algorithm 2): pairs traced in full (new, sent
+  // back by equation 2.1, or every pair in full mode), and pairs walked.
+  enum Batch : uint32_t { kTraced = 0, kWalked = 1 };
+  // A pair's step: its state and limits, and where its two jobs are, in
+  // the host's order: batches_[batch].jobs[first] (a's rays), [first + 1] (b's).
   struct PairWork {
     PairState* state;
     bool fresh;
     PairLimits limits;
     double moved;  // walking pairs: equation 2.1 since the pair's last full step
-    uint32_t list, first;
+    Batch batch;
+    uint32_t first;
   };
 
   Body& body_at(BodyId id) {
@@ -211,12 +219,10 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::vector<uint64_t> state_keys_, next_keys_;
   std::vector<PairState> states_, next_states_;
   uint64_t step_ = 0;
-  // Per-step buffers, kept across steps. Lists: [0] full jobs, [1] iterative.
-  std::vector<std::pair<uint64_t, uint32_t>> keys_;  // the step's pair keys with their indices, ascending
-  std::vector<RayJob> jobs_[2];
-  std::vector<std::vector<RayOutcome>> outcomes_[2];
-  std::vector<RayTally> tallies_[2];
-  std::vector<PairWork> work_;
+  // Per-step buffers, kept across steps.
+  std::vector<std::pair<uint64_t, uint32_t>> keys_;  // the step's pair keys with their input indices, ascending
+  RayBatch batches_[2];                              // by Batch
+  std::vector<PairWork> work_;                       // by input index
 };
 
 void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
@@ -250,13 +256,11 @@ void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out)
   prepare(pairs, out);
   out.stats.seconds_prepare = lap();
   executor_->begin_step();
-  for (uint32_t list : {0u, 1u}) {
-    if (outcomes_[list].size() < jobs_[list].size()) outcomes_[list].resize(jobs_[list].size());
-    if (tallies_[list].size() < jobs_[list].size()) tallies_[list].resize(jobs_[list].size());
-    const Transfers moved = executor_->execute(jobs_[list], config_, outcomes_[list], tallies_[list]);
+  for (Batch b : {kTraced, kWalked}) {
+    const Transfers moved = executor_->execute(batches_[b]);
     out.stats.bytes_to_device += moved.to_device;
     out.stats.bytes_from_device += moved.from_device;
-    (list == 1 ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
+    (b == kWalked ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
   }
   executor_->account(out.stats);
   gather(pairs, out);
@@ -293,40 +297,41 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
   const bool parallel = pairs.size() >= kParallelPairs;
   for_each_index(pairs.size(), parallel, [&](size_t i) { decide(pairs[i], work_[i]); });
 
-  // Each pair's place in its list, in input order.
+  // Each pair's place in its batch, in input order.
   uint32_t jobs[2] = {0, 0};
   for (size_t i = 0; i < pairs.size(); ++i) {
     PairWork& w = work_[i];
-    const bool iterative = w.list == 1;
+    const bool iterative = w.batch == kWalked;
     out.stats.fallbacks_to_full += !w.fresh && config_.mode == Mode::automatic && !iterative;
     ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
-    w.first = jobs[w.list];
-    jobs[w.list] += 2;
+    w.first = jobs[w.batch];
+    jobs[w.batch] += 2;
   }
-  jobs_[0].resize(jobs[0]);
-  jobs_[1].resize(jobs[1]);
+  for (Batch b : {kTraced, kWalked}) {
+    batches_[b].iterative = b == kWalked;
+    batches_[b].resize(jobs[b]);
+  }
 
   // Both jobs of each pair, their transforms and candidate boxes:
   // independent per pair, so on several threads once there are enough.
   for_each_index(pairs.size(), parallel, [&](size_t i) {
     const BodyPair p = pairs[i];
     PairWork& w = work_[i];
-    const bool iterative = w.list == 1;
+    const bool iterative = w.batch == kWalked;
     PairResult& pr = out.pairs[i];
     pr = PairResult{};
     pr.pair = p;
     pr.mode = iterative ? PairMode::iterative : PairMode::full;
     for (uint32_t k = 0; k < 2; ++k) {
       const BodyId source = k == 0 ? p.a : p.b, target = k == 0 ? p.b : p.a;
-      RayJob& job = jobs_[w.list][w.first + k];
+      RayJob& job = batches_[w.batch].jobs[w.first + k];
       job.source = bodies_[source].shape;
       job.target = bodies_[target].shape;
       job.iterative = iterative;
       job.limits = w.limits;
       job.moved = iterative ? w.moved : 0.0;
-      const int direction = source == std::min(p.a, p.b) ? 0 : 1;
-      job.tracked = w.state->tracked[direction];
-      job.residence = &w.state->residence[direction];
+      job.tracked = w.state->tracked[direction(source, target)];
+      job.residence = &w.state->residence[direction(source, target)];
       place(job, source, target);
     }
   });
@@ -365,7 +370,7 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
     state.tracked[0].clear();
     state.tracked[1].clear();
   }
-  w.list = iterative ? 1 : 0;
+  w.batch = iterative ? kWalked : kTraced;
 }
 
 // Each direction from the two poses, not one from the other's inverse:
@@ -388,8 +393,9 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
   RayTally step;
   for (size_t i = 0; i < pairs.size(); ++i) {
     const PairWork& w = work_[i];
-    RayTally pair = tallies_[w.list][w.first];
-    pair += tallies_[w.list][w.first + 1];
+    const RayBatch& batch = batches_[w.batch];
+    RayTally pair = batch.tallies[w.first];
+    pair += batch.tallies[w.first + 1];
     PairResult& pr = out.pairs[i];
     pr.first_contact = contacts;
     pr.contact_count = pair.contacts;
@@ -398,7 +404,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     pr.colliding = pair.contacts > 0;
     contacts += pair.contacts;
     predictive += pair.predictive;
-    outcomes += outcomes_[w.list][w.first].size() + outcomes_[w.list][w.first + 1].size();
+    outcomes += batch.outcomes[w.first].size() + batch.outcomes[w.first + 1].size();
     step += pair;
   }
   static_cast<RayCounts&>(out.stats) = step;
@@ -413,14 +419,15 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     PredictiveRay* ahead = out.predictive.data() + pr.first_predictive;
     for (uint32_t k = 0; k < 2; ++k) {
       const BodyId source = k == 0 ? p.a : p.b, target = k == 0 ? p.b : p.a;
-      std::vector<RayOutcome>& kept = outcomes_[w.list][w.first + k];
-      const RayTally& tally = tallies_[w.list][w.first + k];
+      RayBatch& batch = batches_[w.batch];
+      std::vector<RayOutcome>& kept = batch.outcomes[w.first + k];
+      const RayTally& tally = batch.tallies[w.first + k];
       // Most jobs of a settled pile report nothing and only track.
       if (tally.contacts + tally.predictive > 0)
-        fill(jobs_[w.list][w.first + k], kept, source, target, k == 0 ? Side::a : Side::b, contact, ahead);
+        fill(batch.jobs[w.first + k], kept, source, target, k == 0 ? Side::a : Side::b, contact, ahead);
       // The kept outcomes become the tracked rays; the slot takes the old
       // ones' buffer for a later step.
-      kept.swap(w.state->tracked[source < target ? 0 : 1]);
+      kept.swap(w.state->tracked[direction(source, target)]);
     }
     for (const Contact& contact : out.contacts_of(pr)) pr.max_depth = std::max(pr.max_depth, contact.depth);
   });

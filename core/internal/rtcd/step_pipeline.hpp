@@ -110,25 +110,44 @@ struct RayTally : RayCounts {
 // candidates of a full step are dropped).
 RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative);
 
+// One of a step's two batches (Algorithm 2): the pair-directions traced in
+// full, or those walked from last step's rays; the pipeline never mixes the
+// two. Job j's outcomes and tally are at index j beside it.
+struct RayBatch {
+  bool iterative = false;
+  std::vector<RayJob> jobs;
+  std::vector<std::vector<RayOutcome>> outcomes;
+  std::vector<RayTally> tallies;
+
+  // `count` jobs, their outcome buffers kept from earlier steps.
+  void resize(size_t count) {
+    jobs.resize(count);
+    if (outcomes.size() < count) outcomes.resize(count);
+    if (tallies.size() < count) tallies.resize(count);
+  }
+};
+
 class RayExecutor {
  public:
   virtual ~RayExecutor() = default;
+  // Called once, before anything else: the configuration every batch runs
+  // with (the per-pair limits come with each job).
+  virtual void configure(const Config& config) = 0;
   // Called once per shape, in ShapeId order, before any job names it.
   virtual void add_shape(std::shared_ptr<const Shape> shape) = 0;
   // Called before each step's batches: a residence is good for the step
   // after the one that wrote it.
   virtual void begin_step() {}
-  // Job j's candidates, in order — every source item the overlap box takes
+  // Job j of the batch: its candidates, in order — every source item the overlap box takes
   // (rtcd_place_item: origins with a direction inside it, then edges that
   // meet it; full jobs, by item), or every tracked item it takes (iterative
   // jobs, in tracked order) — each traced, walked or (edges) tested to one
   // outcome; a ray that reports nothing has kind
   // RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when it stays tracked (its
-  // `triangle` is where the next walk starts). tallies[j] and outcomes[j]
-  // receive what settle_outcomes makes of them. The caller sizes both to at
-  // least jobs.size(); the executor only clears and fills.
-  virtual Transfers execute(std::span<const RayJob> jobs, const Config& config,
-                            std::span<std::vector<RayOutcome>> outcomes, std::span<RayTally> tallies) = 0;
+  // `triangle` is where the next walk starts). batch.outcomes[j] and
+  // batch.tallies[j] receive what settle_outcomes makes of them; the
+  // executor only clears and fills them.
+  virtual Transfers execute(RayBatch& batch) = 0;
   // After the step's batches: where its rays ran (StepStats::devices,
   // ::cpu_fallback), so a host or a test can tell a device's work from a
   // fallback's. The CPU executors have nothing to add.
