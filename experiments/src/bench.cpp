@@ -228,19 +228,99 @@ Motion largest_motion(const sim::Recording& recording) {
   return m;
 }
 
-std::string run_bench(const BenchOptions& o) {
-  const fs::path dir(o.out);
-  std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw UsageError("cannot create the output folder " + dir.string() + ": " + ec.message());
-  const auto progress = [&](const std::string& stage) {
-    return [&o, stage](uint64_t done, uint64_t total) {
+namespace {
+
+// A simulated variant of the scene, for Tables 2.3 and 2.4 and the accuracy curve.
+struct Variant {
+  std::string table, label;
+  sim::Scene scene;
+  std::string backend;
+  bool seeded;
+};
+struct Outcome {
+  const Variant* variant;
+  uint64_t seed;
+  SimOutcome result;
+};
+
+// One `rtcd bench`: its stages fill what the report's tables and figures
+// read, one method each.
+class Bench {
+ public:
+  explicit Bench(const BenchOptions& o) : o(o), dir(o.out) {}
+
+  std::string run() {
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw UsageError("cannot create the output folder " + dir.string() + ": " + ec.message());
+    record();
+    replay_configurations();
+    host_gimpact();
+    simulate_variants();
+    std::ofstream report(dir / "report.md");
+    if (!report) throw UsageError("cannot write " + (dir / "report.md").string());
+    introduction(report);
+    table_2_1(report);
+    if (cores > 1) peak_step(report);
+    figure_2_12(report);
+    figures_2_13_and_2_14(report);
+    peers(report);
+    interpenetration_tables(report);
+    accuracy_curve(report);
+    return (dir / "report.md").string();
+  }
+
+ private:
+  // 1. The recording (or the one given): one thread, as Bullet's GIMPACT host runs.
+  void record();
+  // 2. The replays, in lockstep.
+  void replay_configurations();
+  // 3. The same scene with Bullet's GIMPACT as the narrow phase (Figure 2.12).
+  void host_gimpact();
+  // 4. Simulations for the interpenetration tables and the accuracy curve.
+  void simulate_variants();
+  // 5. The report.
+  void introduction(std::ostream& report) const;
+  void table_2_1(std::ostream& report) const;
+  void peak_step(std::ostream& report) const;  // on every core: where the time goes
+  void figure_2_12(std::ostream& report) const;
+  void figures_2_13_and_2_14(std::ostream& report) const;
+  void peers(std::ostream& report) const;  // on the sampled steps
+  void interpenetration_tables(std::ostream& report) const;  // Tables 2.3 and 2.4
+  void accuracy_curve(std::ostream& report) const;
+
+  std::function<void(uint64_t, uint64_t)> progress(const std::string& stage) const {
+    return [this, stage](uint64_t done, uint64_t total) {
       if (o.progress) o.progress(stage, done, total);
     };
-  };
-  const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
+  }
+  const ReplayRun& run_of(const std::string& label) const {
+    for (const ReplayRun& r : runs)
+      if (r.config.label == label) return r;
+    throw std::logic_error("no run " + label);
+  }
 
-  // 1. The recording: one thread, as Bullet's GIMPACT host runs.
+  const BenchOptions& o;
+  const fs::path dir;
+  const int cores = int(std::max(1u, std::thread::hardware_concurrency()));
+  const std::string n_threads = std::to_string(cores) + " threads";
+  sim::Recording recording;
+  sim::Scene scene;  // the recording's, simulating as many steps as were recorded
+  uint64_t steps = 0;
+  Phases phases;
+  Motion motion;
+  uint64_t full_every = 1, peers_every = 1, judge_every = 1, host_steps = 1;
+  Config base;
+  std::vector<std::string> tracers;  // usable backends
+  std::vector<ReplayConfig> configs;
+  std::vector<ReplayRun> runs;
+  std::vector<sim::StepRecord> gimpact_host;
+  bool speculative = false;
+  std::vector<Variant> variants;
+  std::vector<Outcome> outcomes;
+};
+
+void Bench::record() {
   std::string recording_path = o.replay;
   if (recording_path.empty()) {
     std::ifstream in(o.scene);
@@ -248,37 +328,38 @@ std::string run_bench(const BenchOptions& o) {
     std::ostringstream text;
     text << in.rdbuf();
     // The recorded run is also the host comparison's: no passes beside the step.
-    sim::Scene scene = sim::parse_scene(text.str(), o.scene);
-    if (o.steps) scene.steps = o.steps;
-    scene.effects.erase(sim::Effect::interpenetration);
-    scene.effects.erase(sim::Effect::snapshots);
+    sim::Scene recorded = sim::parse_scene(text.str(), o.scene);
+    if (o.steps) recorded.steps = o.steps;
+    recorded.effects.erase(sim::Effect::interpenetration);
+    recorded.effects.erase(sim::Effect::snapshots);
     recording_path = (dir / "recording.rtcdrec").string();
     sim::RecordingWriter writer(recording_path, o.scene, text.str());
     tbb::task_arena one(1);
     one.execute([&] {
-      sim::Simulation simulation(scene);
-      for (uint64_t i = 0; i < scene.steps; ++i) {
+      sim::Simulation simulation(recorded);
+      for (uint64_t i = 0; i < recorded.steps; ++i) {
         simulation.step();
         writer.append(simulation);
-        progress("record (1 thread)")(i + 1, scene.steps);
+        progress("record (1 thread)")(i + 1, recorded.steps);
       }
     });
     writer.close();
   }
-  const sim::Recording recording = sim::Recording::read(recording_path);
+  recording = sim::Recording::read(recording_path);
   // The variants below simulate as many steps as were recorded.
-  sim::Scene scene = recording.scene();
+  scene = recording.scene();
   scene.steps = recording.steps().size();
-  const uint64_t steps = recording.steps().size();
+  steps = recording.steps().size();
   if (steps == 0) throw UsageError(recording_path + ": holds no steps");
-  const Phases phases = find_phases(recording.steps());
-  const Motion motion = largest_motion(recording);
+  phases = find_phases(recording.steps());
+  motion = largest_motion(recording);
+}
 
-  // 2. The replays, in lockstep.
-  const uint64_t full_every = o.full_every ? o.full_every : std::max<uint64_t>(1, steps / 60);
-  const uint64_t peers_every = o.peers_every ? o.peers_every : std::max<uint64_t>(1, steps / 60);
-  const uint64_t judge_every = o.judge_every ? o.judge_every : std::max<uint64_t>(1, steps / 20);
-  const Config base = scene.narrow;
+void Bench::replay_configurations() {
+  full_every = o.full_every ? o.full_every : std::max<uint64_t>(1, steps / 60);
+  peers_every = o.peers_every ? o.peers_every : std::max<uint64_t>(1, steps / 60);
+  judge_every = o.judge_every ? o.judge_every : std::max<uint64_t>(1, steps / 20);
+  base = scene.narrow;
   const auto ours = [&](std::string label, std::string backend, Mode mode, int threads, double threshold = -1) {
     ReplayConfig c;
     c.label = std::move(label);
@@ -293,12 +374,9 @@ std::string run_bench(const BenchOptions& o) {
     c.budget_seconds = o.budget_seconds;
     return c;
   };
-  const std::string n_threads = std::to_string(cores) + " threads";
   // Full and automatic on every usable backend; the knobs on Embree, the reference.
-  std::vector<std::string> tracers;
   for (const BackendInfo& b : available_backends())
     if (b.usable) tracers.push_back(b.name);
-  std::vector<ReplayConfig> configs;
   for (const std::string& t : tracers) {
     configs.push_back(ours("full " + t, t, Mode::full, 1));
     configs.push_back(ours("auto " + t, t, Mode::automatic, 1));
@@ -326,37 +404,24 @@ std::string run_bench(const BenchOptions& o) {
   ReplayOptions ro;
   ro.judge_every = judge_every;
   ro.progress = progress("replay");
-  const std::vector<ReplayRun> runs = replay(recording, configs, ro);
-  const auto run_of = [&](const std::string& label) -> const ReplayRun& {
-    for (const ReplayRun& r : runs)
-      if (r.config.label == label) return r;
-    throw std::logic_error("no run " + label);
-  };
+  runs = replay(recording, configs, ro);
+}
 
-  // 3. The same scene with Bullet's GIMPACT as the narrow phase (Figure 2.12).
-  const uint64_t host_steps = std::min(steps, std::max<uint64_t>(1, o.gimpact_host_steps));
-  std::vector<sim::StepRecord> gimpact_host;
-  {
-    sim::Scene s = scene;
-    s.steps = host_steps;
-    s.effects.erase(sim::Effect::interpenetration);
-    s.effects.erase(sim::Effect::snapshots);
-    sim::Simulation simulation(s, sim::kGimpact);
-    for (uint64_t i = 0; i < host_steps; ++i) {
-      gimpact_host.push_back(simulation.step());
-      progress("GIMPACT host")(i + 1, host_steps);
-    }
+void Bench::host_gimpact() {
+  host_steps = std::min(steps, std::max<uint64_t>(1, o.gimpact_host_steps));
+  sim::Scene s = scene;
+  s.steps = host_steps;
+  s.effects.erase(sim::Effect::interpenetration);
+  s.effects.erase(sim::Effect::snapshots);
+  sim::Simulation simulation(s, sim::kGimpact);
+  for (uint64_t i = 0; i < host_steps; ++i) {
+    gimpact_host.push_back(simulation.step());
+    progress("GIMPACT host")(i + 1, host_steps);
   }
+}
 
-  // 4. Simulations for the interpenetration tables and the accuracy curve.
-  struct Variant {
-    std::string table, label;
-    sim::Scene scene;
-    std::string backend;
-    bool seeded;
-  };
-  std::vector<Variant> variants;
-  const bool speculative = scene.has(sim::Effect::speculative);
+void Bench::simulate_variants() {
+  speculative = scene.has(sim::Effect::speculative);
   variants.push_back({"2.3", "no predictive rays", with_effects(scene, false, false, true), "", true});
   variants.push_back({"2.3", "predictive rays", with_effects(scene, true, false, true), "", true});
   variants.push_back({"2.3", "predictive rays + speculative contacts", with_effects(scene, true, true, true), "", true});
@@ -369,12 +434,6 @@ std::string run_bench(const BenchOptions& o) {
     s.narrow = c.config;
     variants.push_back({"accuracy", c.label, s, c.backend, false});
   }
-  struct Outcome {
-    const Variant* variant;
-    uint64_t seed;
-    SimOutcome result;
-  };
-  std::vector<Outcome> outcomes;
   size_t total_runs = 0, done_runs = 0;
   for (const Variant& v : variants) total_runs += v.seeded ? o.seeds : 1;
   for (const Variant& v : variants) {
@@ -386,10 +445,9 @@ std::string run_bench(const BenchOptions& o) {
       outcomes.push_back({&v, s.seed, simulate(s, v.backend, progress(stage))});
     }
   }
+}
 
-  // 5. The report.
-  std::ofstream report(dir / "report.md");
-  if (!report) throw UsageError("cannot write " + (dir / "report.md").string());
+void Bench::introduction(std::ostream& report) const {
   size_t triangles_at_end = 0;
   {
     const auto shapes = sim::make_shapes(scene);
@@ -426,288 +484,290 @@ std::string run_bench(const BenchOptions& o) {
       any_stopped = true;
     }
   report << (any_stopped ? ".\n\n" : "; none did.\n\n");
-
-  // Table 2.1.
-  {
-    Table t;
-    t.header = {"configuration (1 thread)", "mean ray time in A (ms)", "peak in B (ms)", "mean in C (ms)",
-                "missed rays (judged steps)", "false rays (judged steps)"};
-    Table s;
-    s.header = {"speedup, automatic over full", "A (mean)", "B (peak)", "C (mean)"};
-    for (const std::string& tracer : tracers) {
-      const ReplayRun& full = run_of("full " + tracer);
-      const ReplayRun& autom = run_of("auto " + tracer);
-      Stats f[3], a[3];
-      const uint64_t bounds[4] = {phases.a_begin, phases.b_begin, phases.c_begin, phases.end};
-      for (int p = 0; p < 3; ++p) {
-        f[p] = stats(full, bounds[p], bounds[p + 1], rays_of);
-        a[p] = stats(autom, bounds[p], bounds[p + 1], rays_of);
-      }
-      for (const auto& [run, st] : {std::pair{&full, f}, std::pair{&autom, a}})
-        t.rows.push_back({run->config.label, ms(st[0].mean), ms(st[1].peak), ms(st[2].mean), percent(judged(*run).rate()),
-                          std::to_string(judged(*run).false_rays)});
-      // Speedups over the steps both ran: a sampled or stopped run's steps
-      // differ from the other's, and ray time drifts within a phase.
-      std::vector<bool> both(std::max(full.steps.size(), autom.steps.size()));
-      for (size_t k = 0; k < both.size(); ++k)
-        both[k] = k < full.steps.size() && full.steps[k].ran && k < autom.steps.size() && autom.steps[k].ran;
-      double speedups[3];
-      for (int p = 0; p < 3; ++p) {
-        const Stats fb = stats(full, bounds[p], bounds[p + 1], rays_of, &both);
-        const Stats ab = stats(autom, bounds[p], bounds[p + 1], rays_of, &both);
-        speedups[p] = p == 1 ? fb.peak / ab.peak : fb.mean / ab.mean;
-      }
-      s.rows.push_back({tracer, ratio(speedups[0]), ratio(speedups[1]), ratio(speedups[2])});
-    }
-    report << "## Table 2.1: ray time per phase, full tracing against the automatic mode\n\n"
-              "Ray time is tracing and walking (StepStats seconds_full + seconds_iterative), as the thesis timed. "
-              "Speedups are taken over the steps both configurations ran. "
-              "Missed rays: ray origins the exact reference puts deeper than 1e-5 × the larger radius inside the "
-              "other body with no contact, over every judged step.\n\n";
-    t.markdown(report);
-    s.markdown(report);
-    t.csv(dir / "table_2_1.csv");
-    s.csv(dir / "table_2_1_speedups.csv");
-  }
-
-  // The peak step on every core: where the time goes.
-  if (cores > 1) {
-    const ReplayRun& r = run_of("auto embree, " + n_threads);
-    uint64_t peak = 0;
-    for (uint64_t i = 0; i < r.steps.size(); ++i)
-      if (r.steps[i].seconds > r.steps[peak].seconds) peak = i;
-    const ReplayStep& p = r.steps[peak];
-    const Stats whole = stats(r, 0, steps, whole_of);
-    report << "## The peak step, automatic mode on " << n_threads << "\n\n"
-           << "Narrow phase (detect) per step: mean " << ms(whole.mean) << " ms, peak " << ms(p.seconds)
-           << " ms at step " << peak << " (phase " << phases.of(peak) << ", " << p.pairs << " pairs: " << p.pairs_full
-           << " traced in full, " << p.pairs_iterative << " walked; " << p.rays << " rays). The real-time budget at "
-           << fixed(1 / scene.time_step, 0) << " Hz is " << ms(scene.time_step) << " ms: "
-           << (p.seconds <= scene.time_step ? "met" : "missed by " + ms(p.seconds - scene.time_step) + " ms")
-           << ". Core time per pair at the peak: " << fixed(1e6 * p.seconds * cores / double(std::max<size_t>(1, p.pairs)), 2)
-           << " µs.\n\n";
-    Table t;
-    t.header = {"stage of the peak step", "ms", "share"};
-    for (const auto& [name, v] : {std::pair{"prepare (bounds, candidate vertices, pair state)", p.seconds_prepare},
-                                  {"full tracing", p.seconds_full},
-                                  {"iterative walks", p.seconds_iterative},
-                                  {"gather (results in pair order)", p.seconds_gather},
-                                  {"rest of detect", p.seconds - p.seconds_prepare - p.seconds_full -
-                                                         p.seconds_iterative - p.seconds_gather}})
-      t.rows.push_back({name, ms(v), percent(v / p.seconds)});
-    t.markdown(report);
-    t.csv(dir / "peak_step.csv");
-  }
-
-  // Figure 2.12: the whole step in the host.
-  {
-    Table t;
-    t.header = {"host, first " + std::to_string(host_steps) + " steps, 1 thread", "broad phase (ms)",
-                "narrow phase (ms)", "solver (ms)", "other (ms)", "whole step (ms)"};
-    double b = 0, n = 0, s = 0, e = 0, w = 0;
-    for (uint64_t i = 0; i < host_steps; ++i) {
-      const sim::RecordedStep& r = recording.steps()[i];
-      b += r.seconds_broad, n += r.seconds_narrow, s += r.seconds_solver, e += r.seconds_effects, w += r.seconds_total;
-    }
-    const double k = 1.0 / double(host_steps);
-    t.rows.push_back({"rtcd (" + make_narrow_phase(scene.backend, base)->name() + ", " + to_string(base.mode) + " mode)", ms(b * k), ms(n * k), ms(s * k),
-                      ms(e * k), ms(w * k)});
-    const double ours_whole = w * k;
-    b = n = s = e = w = 0;
-    for (const sim::StepRecord& r : gimpact_host)
-      b += r.seconds_broad, n += r.seconds_narrow, s += r.seconds_solver, e += r.seconds_effects, w += r.seconds_total;
-    t.rows.push_back({"Bullet GIMPACT", ms(b * k), ms(n * k), ms(s * k), ms(e * k), ms(w * k)});
-    report << "## Figure 2.12: the whole simulation step, rtcd against GIMPACT in the same host\n\n"
-              "Both simulations start from the same scene; from the first contact on they follow their own "
-              "trajectories (their contacts differ). Whole step "
-           << ratio(w * k / ours_whole) << " faster with rtcd.\n\n";
-    t.markdown(report);
-    t.csv(dir / "figure_2_12.csv");
-    report << "![Figure 2.12](figure_2_12.png)\n\n";
-  }
-
-  // Figure 2.13 / 2.14 data.
-  {
-    std::ofstream csv(dir / "replay_steps.csv");
-    csv << std::setprecision(9)
-        << "config,engine,threads,step,time,bodies,pairs,phase,seconds,seconds_rays,seconds_prepare,seconds_full,"
-           "seconds_iterative,seconds_gather,pairs_full,pairs_iterative,rays,colliding,contacts,depth_sum,judged,deep,"
-           "missed,false_rays,bytes_to_device,bytes_from_device\n";
-    for (const ReplayRun& r : runs)
-      for (uint64_t i = 0; i < r.steps.size(); ++i) {
-        const ReplayStep& s = r.steps[i];
-        if (!s.ran) continue;
-        const sim::RecordedStep& rec = recording.steps()[i];
-        csv << '"' << r.config.label << "\"," << r.engine_name << ',' << r.config.threads << ',' << i << ',' << rec.time
-            << ',' << rec.bodies << ',' << s.pairs << ',' << phases.of(i) << ',' << s.seconds << ',' << s.seconds_rays()
-            << ',' << s.seconds_prepare << ',' << s.seconds_full << ',' << s.seconds_iterative << ','
-            << s.seconds_gather << ',' << s.pairs_full << ',' << s.pairs_iterative << ',' << s.rays << ','
-            << s.colliding << ',' << s.contacts << ',' << s.depth_sum << ',' << s.judged << ',' << s.deep << ','
-            << s.missed << ',' << s.false_rays << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
-      }
-    std::ofstream host(dir / "host_steps.csv");
-    host << std::setprecision(9) << "host,step,bodies,pairs,contacts,seconds_broad,seconds_narrow,seconds_solver,"
-                                    "seconds_effects,seconds_total\n";
-    for (uint64_t i = 0; i < host_steps; ++i) {
-      const sim::RecordedStep& r = recording.steps()[i];
-      host << "rtcd," << i << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad << ','
-           << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total << '\n';
-    }
-    for (const sim::StepRecord& r : gimpact_host)
-      host << "GIMPACT," << r.step << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad
-           << ',' << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total
-           << '\n';
-    report << "## Figure 2.13: ray time per step, every configuration\n\n![Figure 2.13](figure_2_13.png)\n\n";
-    // The end of the run (its last tenth): the speedups of Figure 2.14.
-    // The last tenth of the steps both configurations of a tracer ran.
-    Table t;
-    t.header = {"end of the run, 1 thread", "steps", "bodies", "full: mean ray time (ms)", "automatic (ms)", "speedup"};
-    for (const std::string& tracer : tracers) {
-      const ReplayRun& full = run_of("full " + tracer);
-      const ReplayRun& autom = run_of("auto " + tracer);
-      const uint64_t end = std::min({steps, full.stopped_at, autom.stopped_at});
-      if (end == 0) continue;
-      const uint64_t begin = end - std::min(end, std::max<uint64_t>(1, steps / 10));  // a run stopped early: from 0
-      const double f = stats(full, begin, end, rays_of).mean;
-      const double a = stats(autom, begin, end, rays_of).mean;
-      t.rows.push_back({tracer, "[" + std::to_string(begin) + ", " + std::to_string(end) + ")",
-                        std::to_string(recording.steps()[begin].bodies) + " – " +
-                            std::to_string(recording.steps()[end - 1].bodies),
-                        ms(f), ms(a), ratio(f / a)});
-    }
-    report << "## Figure 2.14: ray time against the body count\n\n";
-    if (recording.steps().front().bodies == recording.steps().back().bodies)
-      report << "The body count does not change in this scene (Figure 2.13 shows its ray time per step); the "
-                "speedups at its end:\n\n";
-    else
-      report << "![Figure 2.14](figure_2_14.png)\n\n";
-    t.markdown(report);
-    t.csv(dir / "figure_2_14_speedups.csv");
-  }
-
-  // Peers on the sampled steps.
-  {
-    // The steps both peers ran.
-    std::vector<bool> sampled(steps, false);
-    size_t sampled_count = 0;
-    for (uint64_t i = 0; i < steps; ++i)
-      sampled_count += sampled[i] = run_of("GIMPACT").steps[i].ran && run_of("FCL").steps[i].ran;
-    Table t;
-    t.header = {"narrow phase (" + std::to_string(sampled_count) + " sampled steps)",
-                "median step (ms)", "peak step (ms)", "GIMPACT ÷ it, median", "FCL ÷ it, median", "GIMPACT ÷ it, peak",
-                "FCL ÷ it, peak", "colliding pairs", "contacts"};
-    const Stats g = stats(run_of("GIMPACT"), 0, steps, whole_of, &sampled);
-    const Stats f = stats(run_of("FCL"), 0, steps, whole_of, &sampled);
-    std::vector<std::string> labels = {"auto embree", "full embree", "GIMPACT", "FCL"};
-    if (cores > 1) labels.insert(labels.begin() + 2, "auto embree, " + n_threads);
-    for (const std::string& label : labels) {
-      const ReplayRun& r = run_of(label);
-      const Stats st = stats(r, 0, steps, whole_of, &sampled);
-      size_t colliding = 0, contacts = 0;
-      for (uint64_t i = 0; i < steps; ++i)
-        if (sampled[i] && r.steps[i].ran) colliding += r.steps[i].colliding, contacts += r.steps[i].contacts;
-      const bool peer = r.config.engine != Engine::ours;
-      t.rows.push_back({label, ms(st.median), ms(st.peak), peer ? "" : ratio(g.median / st.median),
-                        peer ? "" : ratio(f.median / st.median), peer ? "" : ratio(g.peak / st.peak),
-                        peer ? "" : ratio(f.peak / st.peak), std::to_string(colliding), std::to_string(contacts)});
-    }
-    report << "## Peers on the replay: GIMPACT and FCL against rtcd, same poses, same pairs\n\n"
-              "One thread each (rtcd on " << n_threads << " beside). Ratios of step times measured in the same run "
-              "on the same sampled steps; the automatic mode ran every step and is timed on the sampled ones. "
-              "GIMPACT: btGImpactMeshShape pairs through btGImpactCollisionAlgorithm (margin 0), every penetrating "
-              "point. FCL: fcl::collide on BVHModel<OBBRSS> with every contact. Colliding pairs differ in meaning: "
-              "rtcd counts a pair colliding when a vertex of one body is inside the other; GIMPACT when triangles "
-              "interpenetrate; FCL when triangles intersect. Depths are not compared: GIMPACT's are per clipped "
-              "triangle pair, FCL's per intersecting triangle pair, rtcd's per penetrating vertex along its ray.\n\n";
-    t.markdown(report);
-    t.csv(dir / "peers.csv");
-  }
-
-  // Tables 2.3 and 2.4, and the accuracy curve.
-  {
-    std::ofstream csv(dir / "simulations.csv");
-    csv << std::setprecision(9) << "table,variant,seed,interpenetration,projected_interpenetration,deepest,seconds,narrow_seconds,error\n";
-    for (const Outcome& oc : outcomes)
-      csv << oc.variant->table << ",\"" << oc.variant->label << "\"," << oc.seed << ',' << oc.result.interpenetration
-          << ',' << oc.result.projected << ',' << oc.result.deepest << ',' << oc.result.seconds << ',' << oc.result.narrow_seconds << ",\""
-          << oc.result.error << "\"\n";
-    // A variant's figure over its seeds: the summed ray depth (the thesis'),
-    // or the summed projected depth (what the solver is asked to undo).
-    const auto summary = [&](const std::string& label, double SimOutcome::*figure = &SimOutcome::interpenetration) {
-      std::vector<double> v;
-      for (const Outcome& oc : outcomes)
-        if (oc.variant->label == label && oc.result.error.empty()) v.push_back(oc.result.*figure);
-      return v;
-    };
-    const auto spread = [&](const std::vector<double>& v) {
-      if (v.empty()) return std::string("blew up");
-      const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-      return fixed(mean_of(v), 4) + " (" + fixed(*lo, 4) + " – " + fixed(*hi, 4) + ")";
-    };
-    const auto decrease = [&](const std::vector<double>& without, const std::vector<double>& with) {
-      return percent(1 - mean_of(with) / mean_of(without));
-    };
-    const auto nop = summary("no predictive rays"), p = summary("predictive rays"),
-               ps = summary("predictive rays + speculative contacts"), std_c = summary("standard constraints"),
-               proj = summary("projected constraints");
-    report << "## Table 2.3: cumulative interpenetration at the end, with and without predictive rays\n\n"
-              "Simulations (the contacts feed back), "
-           << o.seeds << " seeds each (mean, and min – max): the summed depth of every penetrating ray of every "
-              "overlapping pair, traced in full without predictive rays, after the last step.\n\n";
-    Table t3;
-    t3.header = {"", "no predictive rays", "predictive rays", "decrease", "predictive + speculative contacts",
-                 "decrease"};
-    t3.rows.push_back({scene.name, spread(nop), spread(p), decrease(nop, p), spread(ps), decrease(nop, ps)});
-    t3.markdown(report);
-    t3.csv(dir / "table_2_3.csv");
-    report << "## Table 2.4: standard against projected constraints\n\n"
-           << (speculative ? "Both with predictive rays and speculative contacts, as the scene runs.\n\n"
-                           : "Both with predictive rays.\n\n");
-    Table t4;
-    t4.header = {"", "standard constraints", "projected constraints", "decrease"};
-    t4.rows.push_back({scene.name, spread(std_c), spread(proj), decrease(std_c, proj)});
-    t4.markdown(report);
-    t4.csv(dir / "table_2_4.csv");
-    report << "The same simulations in summed projected depth (depth times the cosine between ray and normal), "
-              "beside the summed ray depth above: a grazing ray is long but asks the solver for little.\n\n";
-    Table tp;
-    tp.header = {"", "no predictive rays", "predictive rays", "predictive + speculative contacts",
-                 "standard constraints", "projected constraints"};
-    const auto projected = [&](const std::string& label) { return spread(summary(label, &SimOutcome::projected)); };
-    tp.rows.push_back({scene.name, projected("no predictive rays"), projected("predictive rays"),
-                       projected("predictive rays + speculative contacts"), projected("standard constraints"),
-                       projected("projected constraints")});
-    tp.markdown(report);
-    tp.csv(dir / "projected_interpenetration.csv");
-
-    // Phase C, or the last tenth of the steps in a scene that never settles.
-    const bool settles = phases.c_begin < phases.end;
-    const uint64_t settled = settles ? phases.c_begin : steps - std::max<uint64_t>(1, steps / 10);
-    Table a;
-    a.header = {"configuration", "mean ray time, settled (ms)", "mean detect, settled (ms)",
-                "missed rays (judged steps)", "interpenetration at the end (simulated)"};
-    for (const ReplayRun& r : runs) {
-      if (r.config.engine != Engine::ours || r.config.threads != 1) continue;
-      double interpenetration = NAN;
-      for (const Outcome& oc : outcomes)
-        if (oc.variant->table == "accuracy" && oc.variant->label == r.config.label)
-          interpenetration = oc.result.interpenetration;
-      a.rows.push_back({r.config.label, ms(stats(r, settled, phases.end, rays_of).mean),
-                        ms(stats(r, settled, phases.end, whole_of).mean), percent(judged(r).rate()),
-                        fixed(interpenetration, 4)});
-    }
-    report << "## Accuracy against time on the scene\n\nEach configuration replayed (time when settled, missed rays "
-              "judged by the exact reference) and simulated from the scene's seed (interpenetration at the end). "
-              "Settled: "
-           << (settles ? "phase C, steps [" + std::to_string(settled) + ", " + std::to_string(steps) + ")"
-                       : "the scene never settles (phase C is empty), so the last tenth of the steps, [" +
-                             std::to_string(settled) + ", " + std::to_string(steps) + ")")
-           << "; a configuration that stopped for its budget has no time there.\n\n";
-    a.markdown(report);
-    a.csv(dir / "accuracy.csv");
-    report << "![accuracy against time](accuracy.png)\n\n";
-  }
-  return (dir / "report.md").string();
 }
+
+// Table 2.1.
+void Bench::table_2_1(std::ostream& report) const {
+  Table t;
+  t.header = {"configuration (1 thread)", "mean ray time in A (ms)", "peak in B (ms)", "mean in C (ms)",
+              "missed rays (judged steps)", "false rays (judged steps)"};
+  Table s;
+  s.header = {"speedup, automatic over full", "A (mean)", "B (peak)", "C (mean)"};
+  for (const std::string& tracer : tracers) {
+    const ReplayRun& full = run_of("full " + tracer);
+    const ReplayRun& autom = run_of("auto " + tracer);
+    Stats f[3], a[3];
+    const uint64_t bounds[4] = {phases.a_begin, phases.b_begin, phases.c_begin, phases.end};
+    for (int p = 0; p < 3; ++p) {
+      f[p] = stats(full, bounds[p], bounds[p + 1], rays_of);
+      a[p] = stats(autom, bounds[p], bounds[p + 1], rays_of);
+    }
+    for (const auto& [run, st] : {std::pair{&full, f}, std::pair{&autom, a}})
+      t.rows.push_back({run->config.label, ms(st[0].mean), ms(st[1].peak), ms(st[2].mean), percent(judged(*run).rate()),
+                        std::to_string(judged(*run).false_rays)});
+    // Speedups over the steps both ran: a sampled or stopped run's steps
+    // differ from the other's, and ray time drifts within a phase.
+    std::vector<bool> both(std::max(full.steps.size(), autom.steps.size()));
+    for (size_t k = 0; k < both.size(); ++k)
+      both[k] = k < full.steps.size() && full.steps[k].ran && k < autom.steps.size() && autom.steps[k].ran;
+    double speedups[3];
+    for (int p = 0; p < 3; ++p) {
+      const Stats fb = stats(full, bounds[p], bounds[p + 1], rays_of, &both);
+      const Stats ab = stats(autom, bounds[p], bounds[p + 1], rays_of, &both);
+      speedups[p] = p == 1 ? fb.peak / ab.peak : fb.mean / ab.mean;
+    }
+    s.rows.push_back({tracer, ratio(speedups[0]), ratio(speedups[1]), ratio(speedups[2])});
+  }
+  report << "## Table 2.1: ray time per phase, full tracing against the automatic mode\n\n"
+            "Ray time is tracing and walking (StepStats seconds_full + seconds_iterative), as the thesis timed. "
+            "Speedups are taken over the steps both configurations ran. "
+            "Missed rays: ray origins the exact reference puts deeper than 1e-5 × the larger radius inside the "
+            "other body with no contact, over every judged step.\n\n";
+  t.markdown(report);
+  s.markdown(report);
+  t.csv(dir / "table_2_1.csv");
+  s.csv(dir / "table_2_1_speedups.csv");
+}
+
+void Bench::peak_step(std::ostream& report) const {
+  const ReplayRun& r = run_of("auto embree, " + n_threads);
+  uint64_t peak = 0;
+  for (uint64_t i = 0; i < r.steps.size(); ++i)
+    if (r.steps[i].seconds > r.steps[peak].seconds) peak = i;
+  const ReplayStep& p = r.steps[peak];
+  const Stats whole = stats(r, 0, steps, whole_of);
+  report << "## The peak step, automatic mode on " << n_threads << "\n\n"
+         << "Narrow phase (detect) per step: mean " << ms(whole.mean) << " ms, peak " << ms(p.seconds)
+         << " ms at step " << peak << " (phase " << phases.of(peak) << ", " << p.pairs << " pairs: " << p.pairs_full
+         << " traced in full, " << p.pairs_iterative << " walked; " << p.rays << " rays). The real-time budget at "
+         << fixed(1 / scene.time_step, 0) << " Hz is " << ms(scene.time_step) << " ms: "
+         << (p.seconds <= scene.time_step ? "met" : "missed by " + ms(p.seconds - scene.time_step) + " ms")
+         << ". Core time per pair at the peak: " << fixed(1e6 * p.seconds * cores / double(std::max<size_t>(1, p.pairs)), 2)
+         << " µs.\n\n";
+  Table t;
+  t.header = {"stage of the peak step", "ms", "share"};
+  for (const auto& [name, v] : {std::pair{"prepare (bounds, candidate vertices, pair state)", p.seconds_prepare},
+                                {"full tracing", p.seconds_full},
+                                {"iterative walks", p.seconds_iterative},
+                                {"gather (results in pair order)", p.seconds_gather},
+                                {"rest of detect", p.seconds - p.seconds_prepare - p.seconds_full -
+                                                       p.seconds_iterative - p.seconds_gather}})
+    t.rows.push_back({name, ms(v), percent(v / p.seconds)});
+  t.markdown(report);
+  t.csv(dir / "peak_step.csv");
+}
+
+// Figure 2.12: the whole step in the host.
+void Bench::figure_2_12(std::ostream& report) const {
+  Table t;
+  t.header = {"host, first " + std::to_string(host_steps) + " steps, 1 thread", "broad phase (ms)",
+              "narrow phase (ms)", "solver (ms)", "other (ms)", "whole step (ms)"};
+  double b = 0, n = 0, s = 0, e = 0, w = 0;
+  for (uint64_t i = 0; i < host_steps; ++i) {
+    const sim::RecordedStep& r = recording.steps()[i];
+    b += r.seconds_broad, n += r.seconds_narrow, s += r.seconds_solver, e += r.seconds_effects, w += r.seconds_total;
+  }
+  const double k = 1.0 / double(host_steps);
+  t.rows.push_back({"rtcd (" + make_narrow_phase(scene.backend, base)->name() + ", " + to_string(base.mode) + " mode)", ms(b * k), ms(n * k), ms(s * k),
+                    ms(e * k), ms(w * k)});
+  const double ours_whole = w * k;
+  b = n = s = e = w = 0;
+  for (const sim::StepRecord& r : gimpact_host)
+    b += r.seconds_broad, n += r.seconds_narrow, s += r.seconds_solver, e += r.seconds_effects, w += r.seconds_total;
+  t.rows.push_back({"Bullet GIMPACT", ms(b * k), ms(n * k), ms(s * k), ms(e * k), ms(w * k)});
+  report << "## Figure 2.12: the whole simulation step, rtcd against GIMPACT in the same host\n\n"
+            "Both simulations start from the same scene; from the first contact on they follow their own "
+            "trajectories (their contacts differ). Whole step "
+         << ratio(w * k / ours_whole) << " faster with rtcd.\n\n";
+  t.markdown(report);
+  t.csv(dir / "figure_2_12.csv");
+  report << "![Figure 2.12](figure_2_12.png)\n\n";
+}
+
+// Figure 2.13 / 2.14 data.
+void Bench::figures_2_13_and_2_14(std::ostream& report) const {
+  std::ofstream csv(dir / "replay_steps.csv");
+  csv << std::setprecision(9)
+      << "config,engine,threads,step,time,bodies,pairs,phase,seconds,seconds_rays,seconds_prepare,seconds_full,"
+         "seconds_iterative,seconds_gather,pairs_full,pairs_iterative,rays,colliding,contacts,depth_sum,judged,deep,"
+         "missed,false_rays,bytes_to_device,bytes_from_device\n";
+  for (const ReplayRun& r : runs)
+    for (uint64_t i = 0; i < r.steps.size(); ++i) {
+      const ReplayStep& s = r.steps[i];
+      if (!s.ran) continue;
+      const sim::RecordedStep& rec = recording.steps()[i];
+      csv << '"' << r.config.label << "\"," << r.engine_name << ',' << r.config.threads << ',' << i << ',' << rec.time
+          << ',' << rec.bodies << ',' << s.pairs << ',' << phases.of(i) << ',' << s.seconds << ',' << s.seconds_rays()
+          << ',' << s.seconds_prepare << ',' << s.seconds_full << ',' << s.seconds_iterative << ','
+          << s.seconds_gather << ',' << s.pairs_full << ',' << s.pairs_iterative << ',' << s.rays << ','
+          << s.colliding << ',' << s.contacts << ',' << s.depth_sum << ',' << s.judged << ',' << s.deep << ','
+          << s.missed << ',' << s.false_rays << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
+    }
+  std::ofstream host(dir / "host_steps.csv");
+  host << std::setprecision(9) << "host,step,bodies,pairs,contacts,seconds_broad,seconds_narrow,seconds_solver,"
+                                  "seconds_effects,seconds_total\n";
+  for (uint64_t i = 0; i < host_steps; ++i) {
+    const sim::RecordedStep& r = recording.steps()[i];
+    host << "rtcd," << i << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad << ','
+         << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total << '\n';
+  }
+  for (const sim::StepRecord& r : gimpact_host)
+    host << "GIMPACT," << r.step << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad
+         << ',' << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total
+         << '\n';
+  report << "## Figure 2.13: ray time per step, every configuration\n\n![Figure 2.13](figure_2_13.png)\n\n";
+  // The end of the run (its last tenth): the speedups of Figure 2.14.
+  // The last tenth of the steps both configurations of a tracer ran.
+  Table t;
+  t.header = {"end of the run, 1 thread", "steps", "bodies", "full: mean ray time (ms)", "automatic (ms)", "speedup"};
+  for (const std::string& tracer : tracers) {
+    const ReplayRun& full = run_of("full " + tracer);
+    const ReplayRun& autom = run_of("auto " + tracer);
+    const uint64_t end = std::min({steps, full.stopped_at, autom.stopped_at});
+    if (end == 0) continue;
+    const uint64_t begin = end - std::min(end, std::max<uint64_t>(1, steps / 10));  // a run stopped early: from 0
+    const double f = stats(full, begin, end, rays_of).mean;
+    const double a = stats(autom, begin, end, rays_of).mean;
+    t.rows.push_back({tracer, "[" + std::to_string(begin) + ", " + std::to_string(end) + ")",
+                      std::to_string(recording.steps()[begin].bodies) + " – " +
+                          std::to_string(recording.steps()[end - 1].bodies),
+                      ms(f), ms(a), ratio(f / a)});
+  }
+  report << "## Figure 2.14: ray time against the body count\n\n";
+  if (recording.steps().front().bodies == recording.steps().back().bodies)
+    report << "The body count does not change in this scene (Figure 2.13 shows its ray time per step); the "
+              "speedups at its end:\n\n";
+  else
+    report << "![Figure 2.14](figure_2_14.png)\n\n";
+  t.markdown(report);
+  t.csv(dir / "figure_2_14_speedups.csv");
+}
+
+void Bench::peers(std::ostream& report) const {
+  // The steps both peers ran.
+  std::vector<bool> sampled(steps, false);
+  size_t sampled_count = 0;
+  for (uint64_t i = 0; i < steps; ++i)
+    sampled_count += sampled[i] = run_of("GIMPACT").steps[i].ran && run_of("FCL").steps[i].ran;
+  Table t;
+  t.header = {"narrow phase (" + std::to_string(sampled_count) + " sampled steps)",
+              "median step (ms)", "peak step (ms)", "GIMPACT ÷ it, median", "FCL ÷ it, median", "GIMPACT ÷ it, peak",
+              "FCL ÷ it, peak", "colliding pairs", "contacts"};
+  const Stats g = stats(run_of("GIMPACT"), 0, steps, whole_of, &sampled);
+  const Stats f = stats(run_of("FCL"), 0, steps, whole_of, &sampled);
+  std::vector<std::string> labels = {"auto embree", "full embree", "GIMPACT", "FCL"};
+  if (cores > 1) labels.insert(labels.begin() + 2, "auto embree, " + n_threads);
+  for (const std::string& label : labels) {
+    const ReplayRun& r = run_of(label);
+    const Stats st = stats(r, 0, steps, whole_of, &sampled);
+    size_t colliding = 0, contacts = 0;
+    for (uint64_t i = 0; i < steps; ++i)
+      if (sampled[i] && r.steps[i].ran) colliding += r.steps[i].colliding, contacts += r.steps[i].contacts;
+    const bool peer = r.config.engine != Engine::ours;
+    t.rows.push_back({label, ms(st.median), ms(st.peak), peer ? "" : ratio(g.median / st.median),
+                      peer ? "" : ratio(f.median / st.median), peer ? "" : ratio(g.peak / st.peak),
+                      peer ? "" : ratio(f.peak / st.peak), std::to_string(colliding), std::to_string(contacts)});
+  }
+  report << "## Peers on the replay: GIMPACT and FCL against rtcd, same poses, same pairs\n\n"
+            "One thread each (rtcd on " << n_threads << " beside). Ratios of step times measured in the same run "
+            "on the same sampled steps; the automatic mode ran every step and is timed on the sampled ones. "
+            "GIMPACT: btGImpactMeshShape pairs through btGImpactCollisionAlgorithm (margin 0), every penetrating "
+            "point. FCL: fcl::collide on BVHModel<OBBRSS> with every contact. Colliding pairs differ in meaning: "
+            "rtcd counts a pair colliding when a vertex of one body is inside the other; GIMPACT when triangles "
+            "interpenetrate; FCL when triangles intersect. Depths are not compared: GIMPACT's are per clipped "
+            "triangle pair, FCL's per intersecting triangle pair, rtcd's per penetrating vertex along its ray.\n\n";
+  t.markdown(report);
+  t.csv(dir / "peers.csv");
+}
+
+void Bench::interpenetration_tables(std::ostream& report) const {
+  std::ofstream csv(dir / "simulations.csv");
+  csv << std::setprecision(9) << "table,variant,seed,interpenetration,projected_interpenetration,deepest,seconds,narrow_seconds,error\n";
+  for (const Outcome& oc : outcomes)
+    csv << oc.variant->table << ",\"" << oc.variant->label << "\"," << oc.seed << ',' << oc.result.interpenetration
+        << ',' << oc.result.projected << ',' << oc.result.deepest << ',' << oc.result.seconds << ',' << oc.result.narrow_seconds << ",\""
+        << oc.result.error << "\"\n";
+  // A variant's figure over its seeds: the summed ray depth (the thesis'),
+  // or the summed projected depth (what the solver is asked to undo).
+  const auto summary = [&](const std::string& label, double SimOutcome::*figure = &SimOutcome::interpenetration) {
+    std::vector<double> v;
+    for (const Outcome& oc : outcomes)
+      if (oc.variant->label == label && oc.result.error.empty()) v.push_back(oc.result.*figure);
+    return v;
+  };
+  const auto spread = [&](const std::vector<double>& v) {
+    if (v.empty()) return std::string("blew up");
+    const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+    return fixed(mean_of(v), 4) + " (" + fixed(*lo, 4) + " – " + fixed(*hi, 4) + ")";
+  };
+  const auto decrease = [&](const std::vector<double>& without, const std::vector<double>& with) {
+    return percent(1 - mean_of(with) / mean_of(without));
+  };
+  const auto nop = summary("no predictive rays"), p = summary("predictive rays"),
+             ps = summary("predictive rays + speculative contacts"), std_c = summary("standard constraints"),
+             proj = summary("projected constraints");
+  report << "## Table 2.3: cumulative interpenetration at the end, with and without predictive rays\n\n"
+            "Simulations (the contacts feed back), "
+         << o.seeds << " seeds each (mean, and min – max): the summed depth of every penetrating ray of every "
+            "overlapping pair, traced in full without predictive rays, after the last step.\n\n";
+  Table t3;
+  t3.header = {"", "no predictive rays", "predictive rays", "decrease", "predictive + speculative contacts",
+               "decrease"};
+  t3.rows.push_back({scene.name, spread(nop), spread(p), decrease(nop, p), spread(ps), decrease(nop, ps)});
+  t3.markdown(report);
+  t3.csv(dir / "table_2_3.csv");
+  report << "## Table 2.4: standard against projected constraints\n\n"
+         << (speculative ? "Both with predictive rays and speculative contacts, as the scene runs.\n\n"
+                         : "Both with predictive rays.\n\n");
+  Table t4;
+  t4.header = {"", "standard constraints", "projected constraints", "decrease"};
+  t4.rows.push_back({scene.name, spread(std_c), spread(proj), decrease(std_c, proj)});
+  t4.markdown(report);
+  t4.csv(dir / "table_2_4.csv");
+  report << "The same simulations in summed projected depth (depth times the cosine between ray and normal), "
+            "beside the summed ray depth above: a grazing ray is long but asks the solver for little.\n\n";
+  Table tp;
+  tp.header = {"", "no predictive rays", "predictive rays", "predictive + speculative contacts",
+               "standard constraints", "projected constraints"};
+  const auto projected = [&](const std::string& label) { return spread(summary(label, &SimOutcome::projected)); };
+  tp.rows.push_back({scene.name, projected("no predictive rays"), projected("predictive rays"),
+                     projected("predictive rays + speculative contacts"), projected("standard constraints"),
+                     projected("projected constraints")});
+  tp.markdown(report);
+  tp.csv(dir / "projected_interpenetration.csv");
+}
+
+void Bench::accuracy_curve(std::ostream& report) const {
+  // Phase C, or the last tenth of the steps in a scene that never settles.
+  const bool settles = phases.c_begin < phases.end;
+  const uint64_t settled = settles ? phases.c_begin : steps - std::max<uint64_t>(1, steps / 10);
+  Table a;
+  a.header = {"configuration", "mean ray time, settled (ms)", "mean detect, settled (ms)",
+              "missed rays (judged steps)", "interpenetration at the end (simulated)"};
+  for (const ReplayRun& r : runs) {
+    if (r.config.engine != Engine::ours || r.config.threads != 1) continue;
+    double interpenetration = NAN;
+    for (const Outcome& oc : outcomes)
+      if (oc.variant->table == "accuracy" && oc.variant->label == r.config.label)
+        interpenetration = oc.result.interpenetration;
+    a.rows.push_back({r.config.label, ms(stats(r, settled, phases.end, rays_of).mean),
+                      ms(stats(r, settled, phases.end, whole_of).mean), percent(judged(r).rate()),
+                      fixed(interpenetration, 4)});
+  }
+  report << "## Accuracy against time on the scene\n\nEach configuration replayed (time when settled, missed rays "
+            "judged by the exact reference) and simulated from the scene's seed (interpenetration at the end). "
+            "Settled: "
+         << (settles ? "phase C, steps [" + std::to_string(settled) + ", " + std::to_string(steps) + ")"
+                     : "the scene never settles (phase C is empty), so the last tenth of the steps, [" +
+                           std::to_string(settled) + ", " + std::to_string(steps) + ")")
+         << "; a configuration that stopped for its budget has no time there.\n\n";
+  a.markdown(report);
+  a.csv(dir / "accuracy.csv");
+  report << "![accuracy against time](accuracy.png)\n\n";
+}
+
+}  // namespace
+
+std::string run_bench(const BenchOptions& o) { return Bench(o).run(); }
 
 }  // namespace rtcd::experiments
