@@ -14,8 +14,14 @@ std::string range(const Knob& k) {
       return "on, off";
     case KnobType::mode:
       return "full, iterative, auto";
-    default:
-      return "[" + to_string(KnobValue(k.min)) + ", " + to_string(KnobValue(k.max)) + "]";
+    default: {
+      // Appended, not "[" + ...: GCC 12 warns falsely (-Wrestrict) on that.
+      std::string text(1, '[');
+      text += to_string(KnobValue(k.min));
+      text += ", ";
+      text += to_string(KnobValue(k.max));
+      return text += ']';
+    }
   }
 }
 

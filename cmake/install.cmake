@@ -1,6 +1,13 @@
 # install() and a package config, so find_package(rtcd) works for hosts.
 include(CMakePackageConfigHelpers)
-install(TARGETS rtcd_core ${RTCD_BACKEND_TARGETS} rtcd_lib rtcd_cli
+# Both libraries are installed, rtcd::static and rtcd::shared; rtcd::rtcd,
+# what hosts link, is the one BUILD_SHARED_LIBS chose.
+if(BUILD_SHARED_LIBS)
+  set(RTCD_DEFAULT_LIBRARY shared)
+else()
+  set(RTCD_DEFAULT_LIBRARY static)
+endif()
+install(TARGETS rtcd_core ${RTCD_BACKEND_TARGETS} rtcd_lib rtcd_shared rtcd_cli
   EXPORT rtcdTargets
   RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR}
   ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR}

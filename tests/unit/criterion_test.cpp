@@ -101,7 +101,9 @@ TEST(Config, EveryKnobOfTheTable) {
           EXPECT_EQ(std::string(e.what()).rfind(k.name, 0), 0u) << e.what();
         }
         c = {};
-        if (k.type == rtcd::KnobType::count) EXPECT_THROW(k.set(c, 2.5), rtcd::ConfigError);
+        if (k.type == rtcd::KnobType::count) {
+          EXPECT_THROW(k.set(c, 2.5), rtcd::ConfigError);
+        }
         k.set(c, rtcd::KnobValue());
         EXPECT_TRUE(std::holds_alternative<std::monostate>(k.get(c)));
         break;

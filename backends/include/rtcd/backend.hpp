@@ -9,9 +9,11 @@
 
 #include "rtcd/backend_options.hpp"
 #include "rtcd/config.hpp"
+#include "rtcd/export.hpp"
 #include "rtcd/narrow_phase.hpp"
 
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 struct BackendInfo {
   std::string name;
@@ -29,4 +31,5 @@ std::unique_ptr<NarrowPhase> make_narrow_phase(const BackendOptions& options, co
 // The same from the string form (BackendOptions::parse).
 std::unique_ptr<NarrowPhase> make_narrow_phase(std::string_view name, const Config& config = {});
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

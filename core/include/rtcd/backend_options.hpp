@@ -8,7 +8,10 @@
 #include <string_view>
 #include <vector>
 
+#include "rtcd/export.hpp"
+
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 enum class BackendKind : uint8_t {
   automatic,     // the fastest usable one, in a fixed order: embree, opencl, basic
@@ -55,4 +58,5 @@ struct BackendOptions {
   void validate() const;
 };
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

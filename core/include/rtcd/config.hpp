@@ -10,7 +10,10 @@
 #include <string_view>
 #include <variant>
 
+#include "rtcd/export.hpp"
+
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 enum class Mode {
   full,       // trace every candidate ray every step (no pair state is used)
@@ -118,4 +121,5 @@ const Knob* find_knob(std::string_view name);
 // "derived per pair", "on", "off", "0.05", "auto".
 std::string to_string(const KnobValue& value);
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

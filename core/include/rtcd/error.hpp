@@ -7,7 +7,10 @@
 #include <stdexcept>
 #include <string>
 
+#include "rtcd/export.hpp"
+
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 // Base of every error the library throws.
 class Error : public std::runtime_error {
@@ -63,4 +66,5 @@ class UsageError : public Error {
   using Error::Error;
 };
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

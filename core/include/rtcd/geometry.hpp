@@ -4,7 +4,10 @@
 
 #include <Eigen/Geometry>
 
+#include "rtcd/export.hpp"
+
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 // A rigid placement: world = orientation * local + position. Double
 // precision so bodies far from the origin keep their relative precision.
@@ -57,4 +60,5 @@ Eigen::Vector3d closest_on_triangle(const Eigen::Vector3d& p, const Eigen::Vecto
 double segment_distance(const Eigen::Vector3d& p0, const Eigen::Vector3d& p1, const Eigen::Vector3d& q0,
                         const Eigen::Vector3d& q1);
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

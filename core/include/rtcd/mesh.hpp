@@ -11,9 +11,11 @@
 
 #include <Eigen/Core>
 
+#include "rtcd/export.hpp"
 #include "rtcd/geometry.hpp"
 
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 struct MeshOptions {
   // Keep zero-area triangles (common in scanned meshes) instead of rejecting
@@ -143,4 +145,5 @@ void weld_coincident(std::vector<Eigen::Vector3f>& positions, std::vector<Mesh::
 // Writes a Wavefront OBJ that Mesh::load reads back to the same mesh.
 void save_obj(const Mesh& mesh, const std::filesystem::path& path);
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

@@ -12,10 +12,12 @@
 #include <string_view>
 #include <vector>
 
+#include "rtcd/export.hpp"
 #include "rtcd/geometry.hpp"
 #include "rtcd/mesh.hpp"
 
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 // One kind of finding: how many there are and the first few, by file id.
 struct MeshFinding {
@@ -57,4 +59,5 @@ std::vector<std::array<uint32_t, 2>> self_intersections(std::span<const Eigen::V
 // contacts. Empty when the surface does not cross itself.
 std::string self_intersection_warning(const Mesh& mesh, const std::string& name);
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

@@ -9,9 +9,11 @@
 
 #include <Eigen/Core>
 
+#include "rtcd/export.hpp"
 #include "rtcd/mesh.hpp"
 
 namespace rtcd::gen {
+RTCD_PUBLIC_BEGIN
 
 Mesh box(const Eigen::Vector3d& half_extents);
 // Icosahedron subdivided `level` times, projected on the sphere:
@@ -33,4 +35,5 @@ Mesh u_shape(double scale = 1.0, double half_depth = 0.5);
 Mesh in_first_use_order(std::span<const Eigen::Vector3f> positions, std::span<const Mesh::Triangle> triangles,
                         MeshOptions options = {});
 
+RTCD_PUBLIC_END
 }  // namespace rtcd::gen

@@ -7,11 +7,13 @@
 #include <vector>
 
 #include "rtcd/config.hpp"
+#include "rtcd/export.hpp"
 #include "rtcd/geometry.hpp"
 #include "rtcd/results.hpp"
 #include "rtcd/shape.hpp"
 
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 class NarrowPhase {
  public:
@@ -46,4 +48,5 @@ class NarrowPhase {
   Config config_;
 };
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

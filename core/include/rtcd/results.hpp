@@ -11,8 +11,10 @@
 #include <Eigen/Core>
 
 #include "rtcd/config.hpp"
+#include "rtcd/export.hpp"
 
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 using BodyId = uint32_t;
 using ShapeId = uint32_t;
@@ -178,4 +180,5 @@ struct StepResult {
 
 const char* line_status_name(int status);  // rtcd_line_status → "hit", "behind", ...
 
+RTCD_PUBLIC_END
 }  // namespace rtcd

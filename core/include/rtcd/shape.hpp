@@ -12,10 +12,12 @@
 
 #include <Eigen/Core>
 
+#include "rtcd/export.hpp"
 #include "rtcd/geometry.hpp"
 #include "rtcd/mesh.hpp"
 
 namespace rtcd {
+RTCD_PUBLIC_BEGIN
 
 struct Sphere {
   double radius = 1.0;
@@ -136,4 +138,5 @@ class Shape {
   double radius_ = 0.0;
 };
 
+RTCD_PUBLIC_END
 }  // namespace rtcd
