@@ -55,6 +55,8 @@ void print_text(const std::string& file, const MeshCheck& c) {
   }
 }
 
+}  // namespace
+
 nlohmann::json to_json(const MeshCheck& c) {
   nlohmann::json findings = nlohmann::json::object();
   for (const auto& f : c.findings)
@@ -72,8 +74,6 @@ nlohmann::json to_json(const MeshCheck& c) {
                    {c.bounds.max.x(), c.bounds.max.y(), c.bounds.max.z()}};
   return j;
 }
-
-}  // namespace
 
 int run_check(const CheckOptions& o) {
   int code = kFit;

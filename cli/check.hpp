@@ -5,6 +5,10 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
+#include "rtcd/mesh_check.hpp"
+
 namespace rtcd::cli {
 
 struct CheckOptions {
@@ -14,5 +18,8 @@ struct CheckOptions {
 };
 
 int run_check(const CheckOptions& options);
+
+// One mesh's findings as `rtcd check --json` prints them.
+nlohmann::json to_json(const MeshCheck& check);
 
 }  // namespace rtcd::cli

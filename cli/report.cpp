@@ -18,6 +18,8 @@ nlohmann::json record(const RayRecord& r) {
           {"normal", vec(r.normal)}};
 }
 
+}  // namespace
+
 nlohmann::json stats_json(const StepStats& s) {
   nlohmann::json endings;
   for (int i = 0; i < kLineStatusCount; ++i) endings[line_status_name(i)] = s.walk_endings[i];
@@ -38,8 +40,6 @@ nlohmann::json stats_json(const StepStats& s) {
   for (const RayCounter& c : kRayCounters) j[c.name] = s.*c.field;
   return j;
 }
-
-}  // namespace
 
 nlohmann::json to_json(const StepResult& step) {
   const PairResult& pair = step.pairs.at(0);

@@ -11,6 +11,8 @@ namespace rtcd::cli {
 
 // The result of the single pair of a `rtcd query` step.
 nlohmann::json to_json(const StepResult& step);
+// A step's statistics: every counter, the walks' endings, devices and seconds.
+nlohmann::json stats_json(const StepStats& stats);
 void print_table(std::ostream& out, const StepResult& step);
 
 }  // namespace rtcd::cli

@@ -64,7 +64,7 @@ void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
 
 }  // namespace
 
-int run_scene(const RunOptions& o) {
+int run_scene(const RunOptions& o, fs::path* folder) {
   const std::string scene_path = o.scene.empty() ? RTCD_DEFAULT_SCENE : o.scene;
   sim::Scene scene = sim::load_scene(scene_path);
   if (o.steps) {
@@ -80,6 +80,7 @@ int run_scene(const RunOptions& o) {
   std::error_code ec;
   fs::create_directories(dir, ec);
   if (ec) throw UsageError("cannot create the output folder " + dir.string() + ": " + ec.message());
+  if (folder) *folder = dir;
   std::ofstream csv(dir / "steps.csv");
   if (!csv) throw UsageError("cannot write " + (dir / "steps.csv").string());
   csv << std::setprecision(9) << kCsvHeader << '\n';

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 
@@ -20,6 +21,7 @@ struct RunOptions {
 };
 
 // Exit 0 done, 1 the simulation blew up (outputs so far kept), 2 bad input.
-int run_scene(const RunOptions& options);
+// `folder`, when given, receives the output folder.
+int run_scene(const RunOptions& options, std::filesystem::path* folder = nullptr);
 
 }  // namespace rtcd::cli

@@ -38,17 +38,49 @@ void print_row(const validation::Summary& s) {
                 "", s.ccd_pairs, s.ccd_mean_ratio, s.ccd_mean_abs_difference, 1e6 * s.time_ccd);
 }
 
+std::vector<std::string> families_of(const ValidateOptions& o) {
+  return o.family.empty() ? validation::family_names() : std::vector{o.family};
+}
+
+std::vector<std::string> backends_of(const ValidateOptions& o) {
+  if (!o.backend.empty()) return {o.backend};
+  std::vector<std::string> backends;
+  for (const auto& b : available_backends())
+    if (b.usable) backends.push_back(b.name);
+  return backends;
+}
+
+template <class OnSummary>
+void run_families(const ValidateOptions& o, const std::vector<std::string>& families,
+                  const std::vector<std::string>& backends, const OnSummary& on_summary) {
+  validation::RunOptions run;
+  run.config = o.knobs.config();
+  run.mode = validation::parse_run_mode(o.mode);
+  run.pairs = o.pairs;
+  run.seed = o.seed;
+  run.with_oracles = !o.no_oracles;
+  for (const auto& family_name : families) {
+    const validation::Family family = validation::make_family(family_name);
+    warn_if_self_intersecting(*family.a, "family:" + family_name + ":a");
+    warn_if_self_intersecting(*family.b, "family:" + family_name + ":b");
+    for (const auto& backend : backends) {
+      run.backend = backend;
+      on_summary(validation::run_family(family, run).summary);
+    }
+  }
+}
+
 }  // namespace
 
+nlohmann::json validate_json(const ValidateOptions& o) {
+  nlohmann::json all = nlohmann::json::array();
+  run_families(o, families_of(o), backends_of(o),
+               [&](const validation::Summary& s) { all.push_back(validation::to_json(s)); });
+  return all;
+}
+
 int run_validate(const ValidateOptions& o) {
-  std::vector<std::string> families = o.family.empty() ? validation::family_names() : std::vector{o.family};
-  std::vector<std::string> backends;
-  if (o.backend.empty()) {
-    for (const auto& b : available_backends())
-      if (b.usable) backends.push_back(b.name);
-  } else {
-    backends.push_back(o.backend);
-  }
+  const std::vector<std::string> families = families_of(o), backends = backends_of(o);
 
   if (!o.sweep_csv.empty()) {
     if (families.size() != 1 || backends.size() != 1)
@@ -65,32 +97,17 @@ int run_validate(const ValidateOptions& o) {
     return 0;
   }
 
-  validation::RunOptions run;
-  run.config = o.knobs.config();
-  run.mode = validation::parse_run_mode(o.mode);
-  run.pairs = o.pairs;
-  run.seed = o.seed;
-  run.with_oracles = !o.no_oracles;
-  nlohmann::json all = nlohmann::json::array();
-  if (!o.json)
-    std::printf("%-10s %-6s %-9s %5s %6s %7s %8s %8s %5s %6s %6s %8s %9s %8s%s\n", "family", "backend", "mode", "pairs",
-                "coll", "deep", "missed", "miss p99", "false", "mpairs", "fpairs", "depth re", "ours us", "exact us",
-                o.no_oracles ? "" : "  FCL agr FCL blind FCLmiss GIM agr   FCL us  FCLc us   GIM us   xFCL xFCLc  xGIM");
-  for (const auto& family_name : families) {
-    const validation::Family family = validation::make_family(family_name);
-    warn_if_self_intersecting(*family.a, "family:" + family_name + ":a");
-    warn_if_self_intersecting(*family.b, "family:" + family_name + ":b");
-    for (const auto& backend : backends) {
-      run.backend = backend;
-      const validation::Summary s = validation::run_family(family, run).summary;
-      if (o.json)
-        all.push_back(validation::to_json(s));
-      else
-        print_row(s);
-      std::fflush(stdout);
-    }
+  if (o.json) {
+    std::cout << validate_json(o).dump(2) << '\n';
+    return 0;
   }
-  if (o.json) std::cout << all.dump(2) << '\n';
+  std::printf("%-10s %-6s %-9s %5s %6s %7s %8s %8s %5s %6s %6s %8s %9s %8s%s\n", "family", "backend", "mode", "pairs",
+              "coll", "deep", "missed", "miss p99", "false", "mpairs", "fpairs", "depth re", "ours us", "exact us",
+              o.no_oracles ? "" : "  FCL agr FCL blind FCLmiss GIM agr   FCL us  FCLc us   GIM us   xFCL xFCLc  xGIM");
+  run_families(o, families, backends, [](const validation::Summary& s) {
+    print_row(s);  // each row as soon as its run is done
+    std::fflush(stdout);
+  });
   return 0;
 }
 

@@ -5,6 +5,8 @@
 #include <cstdint>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 #include "inputs.hpp"
 
 namespace rtcd::cli {
@@ -22,5 +24,9 @@ struct ValidateOptions {
 };
 
 int run_validate(const ValidateOptions& options);
+
+// The differential runs of `options` (families × backends; not the sweep),
+// each summary as `rtcd validate --json` prints it.
+nlohmann::json validate_json(const ValidateOptions& options);
 
 }  // namespace rtcd::cli

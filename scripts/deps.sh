@@ -5,7 +5,7 @@ set -euo pipefail
 packages=(
   cmake ninja-build g++ clang libclang-rt-14-dev pkg-config
   libeigen3-dev libtbb-dev libembree-dev libassimp-dev libtinyobjloader-dev
-  libcli11-dev nlohmann-json3-dev
+  libcli11-dev nlohmann-json3-dev pybind11-dev python3-dev python3-numpy python3-pytest python3-hypothesis
   libgtest-dev libbenchmark-dev
   libfcl-dev libccd-dev libbullet-dev libstb-dev python3-matplotlib
   pocl-opencl-icd opencl-clhpp-headers opencl-c-headers ocl-icd-opencl-dev clinfo
