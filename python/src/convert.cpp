@@ -25,7 +25,9 @@ std::string shape_text(const py::array& a) {
 py::array numeric(py::handle object, const char* name, const char* kinds, const char* wanted) {
   py::array a;
   try {
-    a = py::module_::import("numpy").attr("asarray")(object);
+    // An array is taken as it is: most calls pass one, and np.asarray costs a call.
+    a = py::isinstance<py::array>(object) ? py::reinterpret_borrow<py::array>(object)
+                                          : py::array(py::module_::import("numpy").attr("asarray")(object));
   } catch (const py::error_already_set&) {
     throw py::type_error(std::string(name) + ": expected " + wanted);
   }
@@ -61,13 +63,18 @@ py::array_t<double, py::array::c_style> float_rows(py::handle object, const char
   return out;
 }
 
-py::array_t<uint32_t, py::array::c_style> index_rows(py::handle object, const char* name, py::ssize_t cols) {
+py::array_t<uint32_t, py::array::c_style> index_rows(py::handle object, const char* name, py::ssize_t cols,
+                                                     bool vector) {
   py::array a = numeric(object, name, "iu", "an array of integers");
   if (a.ndim() == 1 && a.shape(0) == 0) a = a.attr("reshape")(0, cols);  // [] : no rows
-  expect_rows(a, name, cols, false);
+  if (vector && a.ndim() == 1) {
+    if (cols != 1) throw UsageError(std::string(name) + ": expected shape (n,), got " + shape_text(a));
+  } else {
+    expect_rows(a, name, cols, false);
+  }
   if (a.dtype().is(py::dtype::of<uint32_t>()) && (a.flags() & py::array::c_style))
     return py::reinterpret_borrow<py::array_t<uint32_t, py::array::c_style>>(a);
-  py::array_t<uint32_t, py::array::c_style> out({a.shape(0), cols});
+  py::array_t<uint32_t, py::array::c_style> out(std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim()));
   uint32_t* o = out.mutable_data();
   // Through the widest integer of the array's signedness, so no value wraps.
   auto narrow = [&]<class Wide>(Wide) {
@@ -163,7 +170,7 @@ Config config_of(const py::kwargs& kwargs) {
 py::object to_python(const nlohmann::json& json) {
   // Kept for the process's life: a static py::object would be released
   // after the interpreter is gone.
-  static const py::handle loads = py::module_::import("json").attr("loads").release();
+  static const py::handle loads = py::object(py::module_::import("json").attr("loads")).release();
   return loads(json.dump());
 }
 

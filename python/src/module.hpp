@@ -10,6 +10,7 @@
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
+#include <pybind11/stl/filesystem.h>
 
 #include "rtcd/config.hpp"
 #include "rtcd/geometry.hpp"
@@ -38,9 +39,10 @@ std::shared_ptr<const Shape> shape_of(py::handle object, const char* name);
 // float64, C order; copied only when its type or layout differ.
 py::array_t<double, py::array::c_style> float_rows(py::handle object, const char* name, py::ssize_t cols,
                                                    bool vector = false);
-// An (n, cols) array of integers in [0, 2^32) as uint32, C order; copied
-// only when its type or layout differ.
-py::array_t<uint32_t, py::array::c_style> index_rows(py::handle object, const char* name, py::ssize_t cols);
+// An (n, cols) array (or (n,) when `vector` and cols is 1) of integers in
+// [0, 2^32) as uint32, C order; copied only when its type or layout differ.
+py::array_t<uint32_t, py::array::c_style> index_rows(py::handle object, const char* name, py::ssize_t cols,
+                                                     bool vector = false);
 
 // [tx, ty, tz, qw, qx, qy, qz] (the CLI's order), checked as the CLI does;
 // None: the identity.

@@ -1,5 +1,6 @@
 // rtcd.NarrowPhase, its step results as NumPy arrays, rtcd.query,
 // rtcd.backends and rtcd.knobs.
+#include <array>
 #include <mutex>
 #include <optional>
 
@@ -164,6 +165,18 @@ py::object table(const std::shared_ptr<const StepResult>& step, py::dict (*make)
 struct PyNarrowPhase {
   std::unique_ptr<NarrowPhase> impl;
   std::mutex mutex;
+  // Results Python has let go of, reused so a steady step keeps its buffers
+  // as a C++ host's does: two, since `r = narrow.detect(...)` still holds
+  // the last one while the next is made.
+  std::array<std::shared_ptr<StepResult>, 2> spare;
+
+  std::shared_ptr<StepResult> free_result() {
+    for (auto& r : spare) {
+      if (!r) r = std::make_shared<StepResult>();
+      if (r.use_count() == 1) return r;
+    }
+    return std::make_shared<StepResult>();
+  }
 
   template <class F>
   auto locked(F&& f) {
@@ -243,8 +256,16 @@ Each array is built on first access and kept.)")
                                return s.stats;
                              })
       .def(
-          "to_json", [](const PyStep& s) { return to_python(cli::to_json(*s.step)); },
-          "The first pair's result as `rtcd query --json` prints it.")
+          "to_json",
+          [](const PyStep& s, size_t pair) {
+            if (pair >= s.step->pairs.size())
+              throw py::index_error("pair " + std::to_string(pair) + " of a step of " +
+                                    std::to_string(s.step->pairs.size()) + " pairs");
+            StepResult one = *s.step;  // the contact ranges index the whole step's records
+            one.pairs = {s.step->pairs[pair]};
+            return to_python(cli::to_json(one));
+          },
+          py::arg("pair") = 0, "One pair's result as `rtcd query --json` prints it.")
       .def("__repr__", [](const PyStep& s) {
         return "<rtcd.StepResult " + std::to_string(s.step->pairs.size()) + " pairs, " +
                std::to_string(s.step->contacts.size()) + " contacts, " + std::to_string(s.step->predictive.size()) +
@@ -330,8 +351,7 @@ call at a time (others wait), two narrow phases run in parallel.)";
       .def(
           "set_poses",
           [](PyNarrowPhase& n, py::handle bodies, py::handle poses) {
-            const auto ids = index_rows(py::module_::import("numpy").attr("reshape")(bodies, py::make_tuple(-1, 1)),
-                                        "bodies", 1);
+            const auto ids = index_rows(bodies, "bodies", 1, true);
             const std::vector<Pose> list = poses_of(poses, "poses");
             if (list.size() != size_t(ids.shape(0)))
               throw UsageError("set_poses: " + std::to_string(ids.shape(0)) + " bodies but " +
@@ -348,9 +368,9 @@ call at a time (others wait), two narrow phases run in parallel.)";
             const auto a = index_rows(pairs, "pairs", 2);
             static_assert(sizeof(BodyPair) == 2 * sizeof(uint32_t));
             const std::span<const BodyPair> list(reinterpret_cast<const BodyPair*>(a.data()), size_t(a.shape(0)));
-            StepResult result;
-            n.locked([&](NarrowPhase& p) { p.detect(list, result); });
-            return wrap_step(std::move(result));
+            std::shared_ptr<StepResult> result = n.free_result();
+            n.locked([&](NarrowPhase& p) { p.detect(list, *result); });
+            return py::cast(PyStep{std::move(result), {}, {}, {}, {}, {}});
           },
           py::arg("pairs"),
           "One step over (p, 2) candidate pairs of body ids. Pair state carries to the next call; a pair absent "

@@ -50,3 +50,15 @@ message("${out}")
 if(rc)
   message(FATAL_ERROR "the Bullet host built against the installed rtcd::sim failed")
 endif()
+# The Python package, where it was built: installed where the interpreter
+# finds it under the prefix, importable from there alone.
+if(PYTHON)
+  set(site ${WORK_DIR}/prefix/${PYTHON_SITE})
+  execute_process(COMMAND ${CMAKE_COMMAND} -E env PYTHONPATH=${site} ${PYTHON} -c
+                          "import rtcd; print(rtcd.__file__); rtcd.Mesh.load('${MESH}'); assert rtcd.__file__.startswith('${site}')"
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
+  message("python: ${out}${err}")
+  if(rc)
+    message(FATAL_ERROR "the installed Python package rtcd does not import from ${site}")
+  endif()
+endif()
