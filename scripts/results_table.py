@@ -32,7 +32,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join("docs", "results")
 
 # The folders, in the order docs/results/README.md lists them.
-FOLDERS = ["run", "avalanche", "stream", "validation", "opencl", "threshold-sweep", "accuracy-sweep", "edges"]
+FOLDERS = ["run", "avalanche", "stream", "validation", "opencl", "threshold-sweep", "accuracy-sweep", "edges",
+           "python"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
 
@@ -330,8 +331,23 @@ def run_rows():
     ]
 
 
+def python_rows():
+    m = meta("python")
+    source = "python/overhead.json"
+    rows = read_json("python", "overhead.json").get("rows", [])
+    by = {(r.get("mode"), r.get("pairs")): r for r in rows}
+    for key in (("full", 1), ("iterative", 1), ("full", 64), ("iterative", 64)):
+        if key not in by:
+            raise ResultError(f"{RESULTS}/{source}: no row for {key[0]} mode, {key[1]} pairs")
+    one = "; ".join(f"{mode} {by[(mode, 1)]['overhead_us']:.1f} µs" for mode in ("full", "iterative"))
+    many = "; ".join(f"{mode} {by[(mode, 64)]['overhead_percent']:.1f}%" for mode in ("full", "iterative"))
+    return [Row("Python `detect()` beyond the C++ call, 1 resting pair (goal < 5 µs)", one, "python", source, [m]),
+            Row("Python `detect()` beyond the C++ call, 64 pairs, share of the C++ time (goal ≤ 10%)", many,
+                "python", source, [m])]
+
+
 def all_rows():
-    return run_rows() + avalanche_rows() + stream_rows() + validation_rows() + opencl_rows()
+    return run_rows() + avalanche_rows() + stream_rows() + validation_rows() + opencl_rows() + python_rows()
 
 
 # ---------------------------------------------------------------- blocks

@@ -7,6 +7,8 @@
 #include "inputs.hpp"
 #include "module.hpp"
 #include "rtcd/error.hpp"
+#include "rtcd/sim/recording.hpp"
+#include "rtcd/sim/scene.hpp"
 #include "rtcd/sim/simulation.hpp"
 
 namespace rtcd::python {
@@ -193,6 +195,10 @@ void bind_errors(py::module_& m) {
       make("BackendError", py::make_tuple(py::handle(error)), "A backend that is unknown or cannot run here.");
   static PyObject* simulation =
       make("SimulationError", py::make_tuple(py::handle(error)), "A simulation that blew up (the step and the body).");
+  static PyObject* scene = make("SceneError", py::make_tuple(py::handle(error), py::handle(PyExc_ValueError)),
+                                "A scene file rtcd cannot run: the file and the key path.");
+  static PyObject* recording = make("RecordingError", py::make_tuple(py::handle(error), py::handle(PyExc_ValueError)),
+                                    "A recording rtcd cannot read: the file, the step, what.");
   py::register_exception_translator([](std::exception_ptr thrown) {
     auto raise = [](PyObject* type, const char* message) { PyErr_SetString(type, message); };
     try {
@@ -211,6 +217,10 @@ void bind_errors(py::module_& m) {
       raise(backend, e.what());
     } catch (const sim::SimulationError& e) {
       raise(simulation, e.what());
+    } catch (const sim::SceneError& e) {
+      raise(scene, e.what());
+    } catch (const sim::RecordingError& e) {
+      raise(recording, e.what());
     } catch (const Error& e) {
       raise(error, e.what());
     }

@@ -3,6 +3,7 @@
 #include <array>
 #include <mutex>
 #include <optional>
+#include <sstream>
 
 #include "inputs.hpp"
 #include "module.hpp"
@@ -186,13 +187,30 @@ struct PyNarrowPhase {
   }
 };
 
+// `text` as lines of at most 76 characters, each after `indent`.
+std::string wrapped(const std::string& text, const std::string& indent) {
+  std::string out, line;
+  std::istringstream words(text);
+  for (std::string word; words >> word;) {
+    if (!line.empty() && indent.size() + line.size() + 1 + word.size() > 76) {
+      out += indent + line + "\n";
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  return out + (line.empty() ? "" : indent + line + "\n");
+}
+
+// Each knob of the table: name, kind, range and default, meaning, cost.
 std::string knob_docs() {
+  static constexpr const char* types[] = {"True or False", "a whole number", "a length", "'full', 'iterative' or 'auto'"};
   std::string doc;
   for (const Knob& k : knobs()) {
-    doc += "    " + std::string(k.name) + ": " + k.meaning + " Default: " + k.unset;
+    std::string head = std::string(k.name) + ": " + types[int(k.type)];
     if (k.type == KnobType::count || k.type == KnobType::length)
-      doc += "; range " + to_string(KnobValue(k.min)) + " .. " + to_string(KnobValue(k.max));
-    doc += ". Cost: " + std::string(k.cost) + ".\n";
+      head += " in " + to_string(KnobValue(k.min)) + " .. " + to_string(KnobValue(k.max)) + ", or None";
+    doc += "    " + head + " (default: " + k.unset + ")\n";
+    doc += wrapped(std::string(k.meaning) + ". Cost: " + k.cost + ".", "        ");
   }
   return doc;
 }

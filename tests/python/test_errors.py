@@ -18,7 +18,7 @@ def box_arrays():
 
 def test_exception_hierarchy():
     assert issubclass(rtcd.Error, RuntimeError)
-    for cls in (rtcd.MeshError, rtcd.ConfigError, rtcd.UsageError):
+    for cls in (rtcd.MeshError, rtcd.ConfigError, rtcd.UsageError, rtcd.SceneError, rtcd.RecordingError):
         assert issubclass(cls, rtcd.Error) and issubclass(cls, ValueError), cls
     assert issubclass(rtcd.BackendError, rtcd.Error) and issubclass(rtcd.BackendError, RuntimeError)
     assert not issubclass(rtcd.BackendError, ValueError), "nothing wrong with the input"
@@ -228,12 +228,12 @@ def test_unknown_family():
 
 def test_missing_scene(tmp_path):
     path = tmp_path / "missing.json"
-    with pytest.raises(rtcd.Error, match="missing.json"):
+    with pytest.raises(rtcd.SceneError, match="missing.json"):
         rtcd.Simulation(path)
 
 
 def test_scene_of_the_wrong_shape():
-    with pytest.raises(rtcd.Error, match="bodies"):
+    with pytest.raises(rtcd.SceneError, match="bodies"):
         rtcd.Simulation({"effects": ["gravity"], "bodies": "x"})
 
 
