@@ -6,7 +6,8 @@ two 902-triangle concave blobs resting in a shallow overlap, B jittering by
 1e-3 each step, Embree, full and iterative mode, 1 and 64 pairs. One
 iteration is what the C++ benchmark times: every B posed, then detect().
 Python's time (set_poses + detect; and again with every contact column
-read) minus rtcd_bench's for the same case, run interleaved, medians.
+read) minus rtcd_bench's for the same case run just before it: the median
+over rounds of that difference, and its share of the median C++ time.
 
   PYTHONPATH=build/release/python /usr/bin/python3 bench/python_overhead.py \\
       --bench build/release/bench/rtcd_bench --out docs/results/python
@@ -73,13 +74,13 @@ def python_time(a, b, offset, mode, count, seconds, read_arrays):
     return statistics.median(iterations(n) for _ in range(5))
 
 
-def cpp_times(bench, seconds):
-    """rtcd_bench's real time per iteration, by case name."""
-    names = "|".join(f"{c}/{n}" for _, c in CASES for n in COUNTS)
-    out = subprocess.run([bench, f"--benchmark_filter=^({names})$", "--benchmark_format=json",
+def cpp_time(bench, name, seconds):
+    """rtcd_bench's real time per iteration of one case, in seconds."""
+    out = subprocess.run([bench, f"--benchmark_filter=^{name}$", "--benchmark_format=json",
                           f"--benchmark_min_time={seconds}"], check=True, capture_output=True, text=True).stdout
     report = json.loads(out[out.index("{"):])  # after the line naming the backends
-    return {b["name"]: b["real_time"] * 1e-6 for b in report["benchmarks"]}  # microseconds
+    (b,) = report["benchmarks"]
+    return b["real_time"] * 1e-6  # reported in microseconds
 
 
 def main():
@@ -93,24 +94,30 @@ def main():
     a, b = rtcd.gen.concave_blob(902, 1), rtcd.gen.concave_blob(902, 2)
     offset = resting_offset(a, b)
     runs = {}
+    # Each case's C++ and Python runs back to back, round after round: this
+    # VM's speed drifts over minutes, and a difference of two runs far apart
+    # would measure the drift.
     for _ in range(args.rounds):
-        cpp = cpp_times(args.bench, args.seconds)
         for mode, case in CASES:
             for count in COUNTS:
                 r = runs.setdefault(f"{case}/{count}", {"mode": mode, "pairs": count, "cpp": [], "python": [],
                                                         "python_arrays": []})
-                r["cpp"].append(cpp[f"{case}/{count}"])
+                r["cpp"].append(cpp_time(args.bench, f"{case}/{count}", args.seconds))
                 r["python"].append(python_time(a, b, offset, mode, count, args.seconds, False))
                 r["python_arrays"].append(python_time(a, b, offset, mode, count, args.seconds, True))
 
     rows = []
     for name, r in runs.items():
-        cpp, py, arrays = (statistics.median(r[k]) for k in ("cpp", "python", "python_arrays"))
-        rows.append({"case": name, "mode": r["mode"], "pairs": r["pairs"], "cpp_us": 1e6 * cpp, "python_us": 1e6 * py,
-                     "overhead_us": 1e6 * (py - cpp), "overhead_percent": 100 * (py - cpp) / cpp,
-                     "python_with_arrays_us": 1e6 * arrays, "arrays_overhead_us": 1e6 * (arrays - cpp),
-                     "runs": r})
-    lines = ["| case | pairs | C++ µs | Python µs | overhead µs | overhead % | Python + arrays µs | overhead µs |",
+        cpp = statistics.median(r["cpp"])
+        # The median over rounds of each round's difference.
+        over = statistics.median(p - c for p, c in zip(r["python"], r["cpp"]))
+        over_arrays = statistics.median(p - c for p, c in zip(r["python_arrays"], r["cpp"]))
+        rows.append({"case": name, "mode": r["mode"], "pairs": r["pairs"], "cpp_us": 1e6 * cpp,
+                     "python_us": 1e6 * statistics.median(r["python"]), "overhead_us": 1e6 * over,
+                     "overhead_percent": 100 * over / cpp,
+                     "python_with_arrays_us": 1e6 * statistics.median(r["python_arrays"]),
+                     "arrays_overhead_us": 1e6 * over_arrays, "runs": r})
+    lines = ["| mode | pairs | C++ µs | Python µs | overhead µs | overhead % | Python + arrays µs | overhead µs |",
              "|---|---:|---:|---:|---:|---:|---:|---:|"]
     for r in rows:
         lines.append(f"| {r['mode']} | {r['pairs']} | {r['cpp_us']:.1f} | {r['python_us']:.1f} | "
