@@ -57,45 +57,53 @@ py::dict ray_columns(const StepResult& r, bool contacts, bool predictive) {
        push = column_of<double>(n, 3);
   auto depth = column_of<double>(n), projected = column_of<double>(n), distance = column_of<double>(n);
   auto is_predictive = column_of<bool>(n);
-  auto put3 = [](py::array_t<double>& a, size_t row, const Eigen::Vector3d& v) {
-    for (int k = 0; k < 3; ++k) a.mutable_at(row, k) = v[k];
-  };
+  // Written through raw pointers: the arrays are new, C-ordered and unchecked here.
+  int64_t* pair_at = pair.mutable_data();
+  uint8_t *source_at = source.mutable_data(), *kind_at = kind.mutable_data();
+  uint32_t *source_body_at = source_body.mutable_data(), *target_body_at = target_body.mutable_data(),
+           *vertex_at = vertex.mutable_data(), *edge_at = edge.mutable_data();
+  int32_t* triangle_at = triangle.mutable_data();
+  double *origin_at = origin.mutable_data(), *direction_at = direction.mutable_data(),
+         *normal_at = normal.mutable_data(), *push_at = push.mutable_data(), *depth_at = depth.mutable_data(),
+         *projected_at = projected.mutable_data(), *distance_at = distance.mutable_data();
+  bool* predictive_at = is_predictive.mutable_data();
+  auto put3 = [](double* a, size_t row, const Eigen::Vector3d& v) { std::copy(v.data(), v.data() + 3, a + 3 * row); };
   size_t row = 0;
   auto put = [&](size_t p, const RayRecord& ray) {
-    pair.mutable_at(row) = int64_t(p);
-    source.mutable_at(row) = uint8_t(ray.source);
-    source_body.mutable_at(row) = ray.source_body;
-    target_body.mutable_at(row) = ray.target_body;
-    vertex.mutable_at(row) = ray.vertex;
-    triangle.mutable_at(row) = ray.triangle;
-    put3(origin, row, ray.origin);
-    put3(direction, row, ray.direction);
-    put3(normal, row, ray.normal);
+    pair_at[row] = int64_t(p);
+    source_at[row] = uint8_t(ray.source);
+    source_body_at[row] = ray.source_body;
+    target_body_at[row] = ray.target_body;
+    vertex_at[row] = ray.vertex;
+    triangle_at[row] = ray.triangle;
+    put3(origin_at, row, ray.origin);
+    put3(direction_at, row, ray.direction);
+    put3(normal_at, row, ray.normal);
   };
   if (contacts)
     for (size_t p = 0; p < r.pairs.size(); ++p)
       for (const Contact& c : r.contacts_of(r.pairs[p])) {
         put(p, c);
-        kind.mutable_at(row) = uint8_t(c.kind);
-        edge.mutable_at(row, 0) = c.edge[0];
-        edge.mutable_at(row, 1) = c.edge[1];
-        depth.mutable_at(row) = c.depth;
-        projected.mutable_at(row) = c.projected_depth;
-        put3(push, row, c.push);
-        distance.mutable_at(row) = 0.0;
-        is_predictive.mutable_at(row) = false;
+        kind_at[row] = uint8_t(c.kind);
+        edge_at[2 * row] = c.edge[0];
+        edge_at[2 * row + 1] = c.edge[1];
+        depth_at[row] = c.depth;
+        projected_at[row] = c.projected_depth;
+        put3(push_at, row, c.push);
+        distance_at[row] = 0.0;
+        predictive_at[row] = false;
         ++row;
       }
   if (predictive)
     for (size_t p = 0; p < r.pairs.size(); ++p)
       for (const PredictiveRay& q : r.predictive_of(r.pairs[p])) {
         put(p, q);
-        kind.mutable_at(row) = uint8_t(ContactKind::vertex);
-        edge.mutable_at(row, 0) = edge.mutable_at(row, 1) = q.vertex;
-        depth.mutable_at(row) = projected.mutable_at(row) = 0.0;
-        put3(push, row, Eigen::Vector3d::Zero());
-        distance.mutable_at(row) = q.distance;
-        is_predictive.mutable_at(row) = true;
+        kind_at[row] = uint8_t(ContactKind::vertex);
+        edge_at[2 * row] = edge_at[2 * row + 1] = q.vertex;
+        depth_at[row] = projected_at[row] = 0.0;
+        put3(push_at, row, Eigen::Vector3d::Zero());
+        distance_at[row] = q.distance;
+        predictive_at[row] = true;
         ++row;
       }
   py::dict d;
