@@ -129,3 +129,14 @@ def blobs() -> tuple[rtcd.Mesh, rtcd.Mesh]:
 @pytest.fixture(scope="session")
 def resting_x() -> float:
     return resting_offset()
+
+
+def resting_rig(blobs, x: float, mode: str = "auto", copies: int = 1, threads: int = 0):
+    """`copies` of the resting blob pair, 10 apart along y; returns the
+    narrow phase and the (copies, 2) pairs array."""
+    narrow = rtcd.NarrowPhase("embree", mode=mode, threads=threads)
+    sa, sb = narrow.add_shape(blobs[0]), narrow.add_shape(blobs[1])
+    offsets = 10.0 * np.arange(copies)
+    a = narrow.add_bodies(sa, [pose((0, y, 0)) for y in offsets])
+    b = narrow.add_bodies(sb, [pose((x, y + 0.1, 0.05)) for y in offsets])
+    return narrow, np.column_stack([a, b]).astype(np.uint32)
