@@ -15,9 +15,11 @@ namespace {
 
 // One phase's steps summed.
 struct Sum {
+  std::string name;
   uint64_t steps = 0, peak_step = 0;
   double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
   size_t pairs = 0, pairs_full = 0, fallbacks = 0, rays = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+  RayCounts counts;
 
   void add(uint64_t step, const experiments::ReplayStep& s) {
     ++steps;
@@ -33,6 +35,7 @@ struct Sum {
     pairs += s.pairs;
     pairs_full += s.pairs_full;
     fallbacks += s.fallbacks;
+    counts += s.counts;
     rays += s.rays;
     contacts += s.contacts;
     judged += s.judged;
@@ -42,11 +45,11 @@ struct Sum {
   }
 };
 
-void print_row(const std::string& name, const Sum& s) {
+void print_row(const Sum& s) {
   const double n = double(std::max<uint64_t>(s.steps, 1));
   const auto ms = [&](double seconds) { return 1e3 * seconds / n; };
   const auto percent = [&](size_t count) { return s.pairs ? 100.0 * double(count) / double(s.pairs) : 0.0; };
-  std::printf("| %s | %llu | %.3f | %.2f (%llu) | %.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.1f%% | %.0f | %.0f | ", name.c_str(),
+  std::printf("| %s | %llu | %.3f | %.2f (%llu) | %.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.1f%% | %.0f | %.0f | ", s.name.c_str(),
               static_cast<unsigned long long>(s.steps), ms(s.detect), 1e3 * s.peak,
               static_cast<unsigned long long>(s.peak_step), ms(s.prepare), ms(s.full), ms(s.walks), ms(s.gather),
               double(s.pairs) / n, percent(s.pairs_full), percent(s.fallbacks), double(s.rays) / n,
@@ -111,17 +114,30 @@ int run_replay(const ReplayOptions& o) {
       "| phase | steps | detect (ms) | peak (ms, step) | prepare | full tracing | walks | gather | pairs | traced in "
       "full | sent back | rays | contacts | judged steps |\n");
   std::printf("| :-- | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | --: | :-- |\n");
-  Sum all;
+  std::vector<Sum> sums;  // the phases with steps, then all
   for (const char phase : {'-', 'A', 'B', 'C'}) {
     Sum sum;
+    sum.name = phase == '-' ? "before A" : std::string(1, phase);
     for (uint64_t k = 0; k < run.steps.size(); ++k)
       if (phases.of(k) == phase) sum.add(k, run.steps[k]);
-    if (sum.steps == 0) continue;
-    print_row(phase == '-' ? "before A" : std::string(1, phase), sum);
+    if (sum.steps > 0) sums.push_back(sum);
   }
+  Sum& all = sums.emplace_back();
+  all.name = "all";
   for (uint64_t k = 0; k < run.steps.size(); ++k) all.add(k, run.steps[k]);
-  print_row("all", all);
+  for (const Sum& s : sums) print_row(s);
   print_devices(run);
+  // Where the rays went: each counter of kRayCounters, per step, per phase.
+  std::printf("\n| counter (per step) |");
+  for (const Sum& s : sums) std::printf(" %s |", s.name.c_str());
+  std::printf("\n| :-- |");
+  for (size_t i = 0; i < sums.size(); ++i) std::printf(" --: |");
+  std::printf("\n");
+  for (const RayCounter& c : kRayCounters) {
+    std::printf("| %s |", c.name);
+    for (const Sum& s : sums) std::printf(" %.0f |", double(s.counts.*c.field) / double(std::max<uint64_t>(s.steps, 1)));
+    std::printf("\n");
+  }
   std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats); sent back: pairs traced in full because equation 2.1 ended their walks (the others traced in full are new).\n");
   return 0;
 }

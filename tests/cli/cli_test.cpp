@@ -256,6 +256,10 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   ASSERT_NE(all, std::string::npos) << full.out;
   EXPECT_NE(full.out.find("| 100.0% | 0.0% |", all), std::string::npos) << full.out;
   EXPECT_NE(full.out.find("| 6: ", all), std::string::npos) << full.out;
+  // The step's counters per phase: full mode traces, never walks.
+  EXPECT_NE(full.out.find("| rays_iterative | 0 |"), std::string::npos) << full.out;
+  EXPECT_EQ(full.out.find("| rays_full | 0 |"), std::string::npos) << full.out;
+  EXPECT_NE(full.out.find("| edges_tested |"), std::string::npos) << full.out;
   // Automatic mode with a small threshold: equation 2.1 sends pairs back,
   // never more than are traced in full.
   const Outcome automatic = run("replay " + recording + " --displacement-threshold 0.01");

@@ -12,6 +12,7 @@
 
 #include "rtcd/backend.hpp"
 #include "rtcd/config.hpp"
+#include "rtcd/results.hpp"
 #include "rtcd/sim/recording.hpp"
 
 namespace rtcd::experiments {
@@ -49,6 +50,7 @@ struct ReplayStep {
   size_t pairs = 0, colliding = 0, contacts = 0;
   size_t pairs_full = 0, pairs_iterative = 0, rays = 0;
   size_t fallbacks = 0;  // of pairs_full, those equation 2.1 sent back (the rest are new)
+  RayCounts counts;       // ours: the step's rays by what they did (kRayCounters)
   double depth_sum = 0;  // summed depth of every contact as the engine reports it
   size_t bytes_to_device = 0, bytes_from_device = 0;  // ours on OpenCL: the step's host <-> device traffic
   std::vector<size_t> device_rays;  // ours on OpenCL: the rays each device ran (StepStats::devices)
