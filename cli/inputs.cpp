@@ -60,10 +60,15 @@ Config Knobs::config() const {
   return c;
 }
 
+std::string option_name(const Knob& knob) {
+  std::string name = knob.name;
+  std::replace(name.begin(), name.end(), '_', '-');
+  return name;
+}
+
 void add_knobs(CLI::App& command, Knobs& k) {
   for (const Knob& knob : knobs()) {
-    std::string option = knob.name;
-    std::replace(option.begin(), option.end(), '_', '-');
+    const std::string option = option_name(knob);
     const std::string help = std::string(knob.meaning) + ". Cost: " + knob.cost;
     switch (knob.type) {
       case KnobType::flag:

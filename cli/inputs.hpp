@@ -25,6 +25,8 @@ struct Knobs {
   Config config() const;             // the default Config with these knobs set
 };
 void add_knobs(CLI::App& command, Knobs& knobs);
+// A knob's name as the command line spells it: distance-extension.
+std::string option_name(const Knob& knob);
 
 // "sphere:R", "box:HX,HY,HZ", a mesh file (.obj .off .ply .stl), or a body of a
 // validation family, "family:NAME:a" or "family:NAME:b" (to replay its cases).

@@ -1,7 +1,6 @@
 #include "knobs.hpp"
 
-#include <algorithm>
-
+#include "inputs.hpp"
 #include "rtcd/config.hpp"
 #include "rtcd/results.hpp"
 
@@ -36,8 +35,7 @@ const char* type_name(KnobType t) {
 }
 
 std::string option(const Knob& k) {
-  std::string name = k.name;
-  std::replace(name.begin(), name.end(), '_', '-');
+  const std::string name = option_name(k);
   if (k.type == KnobType::mode) return "each command's `--mode`";
   return k.type == KnobType::flag ? "`--no-" + name + "`" : "`--" + name + "`";
 }

@@ -88,8 +88,6 @@ BackendOptions BackendOptions::parse(std::string_view text) {
         const std::string_view item = list.substr(0, comma);
         const int index = number(item);
         if (index < 0) throw bad("bad device index '" + std::string(item) + "'");
-        if (std::find(o.devices.begin(), o.devices.end(), index) != o.devices.end())
-          throw bad("device " + std::string(item) + " twice");
         o.devices.push_back(index);
         if (comma == std::string_view::npos) break;
         list = list.substr(comma + 1);
@@ -98,6 +96,7 @@ BackendOptions BackendOptions::parse(std::string_view text) {
       throw unknown();
     }
   }
+  o.validate();  // what the syntax leaves open: a device listed twice
   return o;
 }
 
