@@ -2,6 +2,8 @@
 // cross the other body (planks laid crosswise), a sphere's cap in a box face
 // or another sphere, and the edge cases of the edge test.
 #include <cmath>
+#include <set>
+#include <tuple>
 
 #include <gtest/gtest.h>
 
@@ -64,6 +66,39 @@ TEST_P(Edges, PlanksLaidCrosswise) {
     EXPECT_FALSE(none.pairs[0].colliding);
     EXPECT_EQ(none.stats.edges_tested, 0u);
   }
+}
+
+// A ring sinking into a bar as it turns and slides: the bar's top edges
+// cross the ring's tube with no vertex inside. A walking step tests a
+// watched edge only once the pair has moved its clearance, and finds each
+// crossing in the step it begins, as tracing every step in full does (the
+// same edges, step for step).
+TEST_P(Edges, WalkingStepsFindEveryCrossingFullStepsFind) {
+  Config walking;
+  walking.mode = Mode::automatic;
+  Config full;
+  full.mode = Mode::full;
+  auto bar = bar_mesh(0.5, 0.05, 0.05), ring = shape(gen::torus(0.3, 0.08, 24, 8));
+  auto walked = rig(bar, ring, walking), traced = rig(bar, ring, full);
+  size_t crossings = 0, skipped = 0, walks = 0;
+  for (int step = 0; step < 30; ++step) {
+    SCOPED_TRACE("step " + std::to_string(step));
+    const Eigen::Quaterniond turn(Eigen::AngleAxisd(0.01 * step, Eigen::Vector3d::UnitZ()));
+    const Pose pose = at(Eigen::Vector3d(0.003 * step, 0, 0.14 - 0.002 * step), turn);
+    const StepResult w = walked.step(Pose{}, pose), f = traced.step(Pose{}, pose);
+    std::set<std::tuple<int, uint32_t, uint32_t>> edges_w, edges_f;
+    for (const Contact& c : w.contacts)
+      if (c.kind == ContactKind::edge) edges_w.insert({int(c.source), c.edge[0], c.edge[1]});
+    for (const Contact& c : f.contacts)
+      if (c.kind == ContactKind::edge) edges_f.insert({int(c.source), c.edge[0], c.edge[1]});
+    ASSERT_EQ(edges_w, edges_f);
+    crossings += edges_f.size();
+    skipped += w.stats.edges_skipped;
+    walks += w.stats.rays_iterative > 0;
+  }
+  EXPECT_GT(crossings, 50u) << "too few crossings: the comparison would be vacuous";
+  EXPECT_GT(skipped, 20u) << "no edge skipped: the clearance went untested";
+  EXPECT_GT(walks, 10u) << "the pair should walk most steps";
 }
 
 // Two boxes through each other's whole cross-section: contacts are local.

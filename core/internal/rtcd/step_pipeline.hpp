@@ -77,9 +77,10 @@ struct RayTally : RayCounts {
     rays_watched += o.kind == RTCD_RAY_WATCHED;
     if (o.edge) {
       ++edges_tested;
-      // A watched edge left untested (still farther from the surface than
-      // the pair has moved) casts nothing.
-      edges_skipped += o.edge == RTCD_ITEM_EDGE && o.edge_rays == 0 && !o.nearest_query;
+      // A watched edge that needs no ray (clear of the surface by more than
+      // the pair has moved, or found clear by its first walking step's
+      // nearest query) casts nothing.
+      edges_skipped += o.edge == RTCD_ITEM_EDGE && o.edge_rays == 0;
       edge_rays += o.edge_rays;
       nearest_queries += o.nearest_query;
       edge_contacts += o.kind == RTCD_RAY_PENETRATING;

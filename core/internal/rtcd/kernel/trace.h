@@ -167,7 +167,8 @@ RTCD_INLINE void rtcd_volume_trace(int target_kind, float radius, rtcd_vec3 half
 
 /* An edge that makes no contact stays watched, in walking modes, while its
  * segment's box is within the watch reach of the target's box: it is
- * tested again each step, so a crossing is found in the step it begins. */
+ * tested again in walking steps (against a mesh, once the pair has moved
+ * its clearance), so a crossing is found in the step it begins. */
 RTCD_INLINE void rtcd_watch_edge(const rtcd_trace_params* p, const rtcd_candidate* c, rtcd_outcome* o) {
   rtcd_vec3 end = rtcd_add(c->origin, c->direction);
   if (p->watch && !(c->origin.x > p->watch_hi.x && end.x > p->watch_hi.x) &&
@@ -178,36 +179,27 @@ RTCD_INLINE void rtcd_watch_edge(const rtcd_trace_params* p, const rtcd_candidat
     o->kind = RTCD_RAY_WATCHED;
 }
 
-/* A full step watches a mesh edge only where the mesh's surface is within
- * reach of it: some triangle within half its length plus the watch reach
- * of its middle (a ball holding every point within reach of the segment).
- * An edge farther off cannot cross the surface before the next full step;
- * without this test every edge in the target's box would be tested every
- * step. The edge's clearance (the middle's distance to that triangle less
- * half the length: no point of the edge is nearer the surface) rides in the
- * outcome's entry field, so a walking step tests a watched edge only once
- * the pair has moved that far since its full step (rtcd_edge_trace). */
-RTCD_INLINE void rtcd_watch_mesh_edge(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
+/* A watched edge's clearance: how far the pair may move before the edge can
+ * cross the target's surface. Found in the first walking step after a full
+ * step (full steps of pairs traced in full again pay nothing for it): the
+ * distance from the edge's middle to its nearest triangle less half the
+ * edge's length, a bound on every point of the edge. It is kept, less the
+ * motion already made (moved since the full step), in the outcome's entry
+ * field: a later step whose motion since the full step stays below it
+ * cannot move any point of the edge that far from where it was measured
+ * (equation 2.1 bounds both motions). Returns the clearance, or -1 when no
+ * surface is within reach: the pair is traced in full before it moves that
+ * far, so the edge is dropped. */
+RTCD_INLINE float rtcd_edge_clearance(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
                                       rtcd_outcome* o) {
-  float half_length, clearance;
-  rtcd_vec3 middle;
+  float half_length = 0.5f * RTCD_SQRT(rtcd_dot(c->direction, c->direction)), clearance;
+  rtcd_vec3 middle = rtcd_add(c->origin, rtcd_scale(c->direction, 0.5f));
   rtcd_int near;
-  rtcd_watch_edge(p, c, o);
-  if (o->kind != RTCD_RAY_WATCHED) return;
-  if (p->iterative) {
-    o->entry = c->entry; /* the clearance found by the full step */
-    return;
-  }
-  half_length = 0.5f * RTCD_SQRT(rtcd_dot(c->direction, c->direction));
-  middle = rtcd_add(c->origin, rtcd_scale(c->direction, 0.5f));
   o->nearest_query = 1;
-  near = rtcd_tracer_nearest(tracer, middle, half_length + p->reach);
-  if (near < 0) {
-    o->kind = RTCD_RAY_DROPPED;
-    return;
-  }
+  near = rtcd_tracer_nearest(tracer, middle, half_length + p->reach + p->moved);
+  if (near < 0) return -1.0f;
   clearance = RTCD_SQRT(rtcd_tracer_distance2(tracer, near, middle)) - half_length;
-  o->entry = rtcd_float_bits(clearance > 0.0f ? clearance : 0.0f);
+  return clearance > 0.0f ? clearance : 0.0f;
 }
 
 /* Whether the point origin + m * along lies inside the target: its line
@@ -243,23 +235,34 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   float a, b, m, length, tolerance;
   o->edge = RTCD_ITEM_EDGE;
   o->kind = RTCD_RAY_DROPPED;
-  /* A watched edge still farther from the surface than the pair has moved
-   * since its full step cannot cross it yet. */
-  if (p->iterative && c->entry >= 0 && rtcd_bits_float(c->entry) > p->moved) {
-    o->kind = RTCD_RAY_WATCHED;
-    o->entry = c->entry;
-    return;
+  o->entry = c->entry;
+  if (p->iterative) {
+    if (c->entry < 0) {
+      /* Its clearance not known yet: a segment clear of the surface does
+       * not cross it now, and needs no ray. */
+      float clearance = rtcd_edge_clearance(tracer, p, c, o);
+      if (clearance < 0.0f) return;
+      o->entry = rtcd_float_bits(clearance > p->moved ? clearance - p->moved : 0.0f);
+      if (clearance > 0.0f) {
+        o->kind = RTCD_RAY_WATCHED;
+        return;
+      }
+    } else if (rtcd_bits_float(c->entry) > p->moved) {
+      /* Still farther from the surface than the pair has moved. */
+      o->kind = RTCD_RAY_WATCHED;
+      return;
+    }
   }
   first = rtcd_tracer_first_hit(tracer, &forward, 1.0f);
   o->edge_rays = 1;
   if (first.triangle < 0 || rtcd_tracer_leaves(tracer, first.triangle, c->direction)) {
-    rtcd_watch_mesh_edge(tracer, p, c, o);
+    rtcd_watch_edge(p, c, o);
     return;
   }
   last = rtcd_tracer_first_hit(tracer, &backward, 1.0f);
   o->edge_rays = 2;
   if (last.triangle < 0 || rtcd_tracer_leaves(tracer, last.triangle, rtcd_neg(c->direction))) {
-    rtcd_watch_mesh_edge(tracer, p, c, o);
+    rtcd_watch_edge(p, c, o);
     return;
   }
   a = first.t;
@@ -269,13 +272,13 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
     /* Touching (no span), or the middle lies in a gap between pieces: the
      * first piece ends where the ray from the middle met the surface. */
     if (!(a < b) || back.triangle < 0) {
-      rtcd_watch_mesh_edge(tracer, p, c, o);
+      rtcd_watch_edge(p, c, o);
       return;
     }
     b = m - back.t;
     m = 0.5f * (a + b);
     if (!(a < b) || !rtcd_edge_point_inside(tracer, c, m, &back, o)) {
-      rtcd_watch_mesh_edge(tracer, p, c, o);
+      rtcd_watch_edge(p, c, o);
       return;
     }
   }
@@ -286,7 +289,7 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   if (o->triangle < 0) o->triangle = first.triangle;
   tolerance = RTCD_TOUCHING * length;
   if (!(rtcd_tracer_distance2(tracer, o->triangle, point) > tolerance * tolerance)) {
-    rtcd_watch_mesh_edge(tracer, p, c, o);
+    rtcd_watch_edge(p, c, o);
     return;
   }
   o->kind = RTCD_RAY_PENETRATING;
