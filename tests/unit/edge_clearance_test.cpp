@@ -98,6 +98,14 @@ TEST_F(EdgeAboveABox, LaterStepsTestTheEdgeOnlyOnceThePairHasMovedItsClearance) 
   EXPECT_EQ(o.entry, kept);
 }
 
+TEST_F(EdgeAboveABox, APairThatMovedMoreThanHalfTheReachTestsByRaysWithoutALookup) {
+  const rtcd_outcome o = trace(0.35f, -1);
+  EXPECT_EQ(o.nearest_query, 0);
+  EXPECT_GE(o.edge_rays, 1);
+  EXPECT_EQ(o.kind, RTCD_RAY_WATCHED);
+  EXPECT_EQ(rtcd_bits_float(o.entry), 0.0f) << "no clearance: tested every step until the next full step";
+}
+
 TEST_F(EdgeAboveABox, NoSurfaceWithinReachDropsTheEdge) {
   params.reach = 0.2f;  // the ball of 0.1 + 0.2 + 0.1 around the middle misses the box
   const rtcd_outcome o = trace(0.1f, -1);

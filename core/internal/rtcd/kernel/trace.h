@@ -237,7 +237,11 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   o->kind = RTCD_RAY_DROPPED;
   o->entry = c->entry;
   if (p->iterative) {
-    if (c->entry < 0) {
+    if (c->entry < 0 && p->moved > 0.5f * p->reach) {
+      /* Moved more than half the reach already: the pair is soon traced in
+       * full again, and a clearance would keep little; tested by rays. */
+      o->entry = rtcd_float_bits(0.0f);
+    } else if (c->entry < 0) {
       /* Its clearance not known yet: a segment clear of the surface does
        * not cross it now, and needs no ray. */
       float clearance = rtcd_edge_clearance(tracer, p, c, o);
