@@ -141,17 +141,23 @@ RTCD_INLINE int rtcd_place_edge(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3
                                 rtcd_vec3* along_out) {
   double p[3], d[3];
   double s0 = 0.0, s1 = 1.0;
-  int k;
+  int k, across = 0;
   if (along.x == 0.0f && along.y == 0.0f && along.z == 0.0f) return 0;
   for (k = 0; k < 3; ++k) {
     p[k] = f->rotation[3 * k] * origin.x + f->rotation[3 * k + 1] * origin.y + f->rotation[3 * k + 2] * origin.z +
            f->translation[k];
     d[k] = f->rotation[3 * k] * along.x + f->rotation[3 * k + 1] * along.y + f->rotation[3 * k + 2] * along.z;
   }
+  /* Most edges lie wholly inside the box or wholly beside one of its faces:
+   * their ends settle it; only an edge across a face needs the slabs. */
   for (k = 0; k < 3; ++k) {
-    if (d[k] == 0.0) {
-      if (p[k] < f->lo[k] || p[k] > f->hi[k]) return 0;
-    } else {
+    double q = p[k] + d[k];
+    double low = q < p[k] ? q : p[k], high = q < p[k] ? p[k] : q;
+    if (high < f->lo[k] || low > f->hi[k]) return 0;
+    across = across || low < f->lo[k] || high > f->hi[k];
+  }
+  for (k = 0; across && k < 3; ++k) {
+    if (d[k] != 0.0) {
       double a = (f->lo[k] - p[k]) / d[k], b = (f->hi[k] - p[k]) / d[k];
       if (a > b) {
         double swap = a;
