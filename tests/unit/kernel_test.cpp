@@ -142,6 +142,10 @@ TEST(Edges, PlacementTakesSegmentsThroughTheBoxAndNoZeroLengthEdge) {
   EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-3, 2, 0), rtcd_v3(6, 0, 0), &o, &d), 0) << "beside the box";
   EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-3, 0, 0), rtcd_v3(1.9f, 0, 0), &o, &d), 0) << "stops short of it";
   EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-2, -2, 0), rtcd_v3(4, 4, 0), &o, &d), 1) << "diagonal through it";
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(-0.5f, 0.25f, 0), rtcd_v3(1, 0.5f, 0.25f), &o, &d), 1) << "wholly inside";
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(0.8f, 1.5f, 0), rtcd_v3(0.7f, -0.7f, 0), &o, &d), 0)
+      << "past a corner: its ends' box meets the box, the segment does not";
+  EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(0.4f, 1.5f, 0), rtcd_v3(0.7f, -0.7f, 0), &o, &d), 1) << "across a corner";
   EXPECT_EQ(rtcd_place_edge(&f, rtcd_v3(0.5f, 0.5f, 0.5f), rtcd_v3(0, 0, 0), &o, &d), 0) << "zero length";
   rtcd_trace_params p{};
   p.first_edge = 4;
