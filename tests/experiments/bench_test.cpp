@@ -285,6 +285,14 @@ TEST(Bench, WritesEveryTable) {
                            "figure_2_14_speedups.csv", "peers.csv", "table_2_3.csv", "table_2_4.csv", "accuracy.csv",
                            "replay_steps.csv", "host_steps.csv", "simulations.csv"})
     EXPECT_TRUE(fs::exists(fs::path(o.out) / file)) << file;
+  // Table 2.4 as the scene runs, then as the thesis ran it, each from its own simulations.
+  std::ifstream t4(fs::path(o.out) / "table_2_4.csv");
+  std::vector<std::string> rows;
+  for (std::string row; std::getline(t4, row);) rows.push_back(row);
+  ASSERT_EQ(rows.size(), 3u);
+  EXPECT_NE(rows[1].find("8 points per pair"), std::string::npos) << rows[1];
+  EXPECT_NE(rows[2].find("as the thesis ran (no speculative contacts, 4 points per pair)"), std::string::npos) << rows[2];
+  EXPECT_EQ(rows[2].find("blew up"), std::string::npos) << rows[2];
   // Replaying the recording gives the same tables' shape without simulating it again.
   experiments::BenchOptions again = o;
   again.scene.clear();
