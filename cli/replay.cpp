@@ -18,7 +18,7 @@ struct Sum {
   std::string name;
   uint64_t steps = 0, peak_step = 0;
   double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
-  size_t pairs = 0, pairs_full = 0, fallbacks = 0, rays = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+  size_t pairs = 0, pairs_full = 0, fallbacks = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
   RayCounts counts;
 
   void add(uint64_t step, const experiments::ReplayStep& s) {
@@ -36,7 +36,6 @@ struct Sum {
     pairs_full += s.pairs_full;
     fallbacks += s.fallbacks;
     counts += s.counts;
-    rays += s.rays;
     contacts += s.contacts;
     judged += s.judged;
     deep += s.deep;
@@ -52,7 +51,7 @@ void print_row(const Sum& s) {
   std::printf("| %s | %llu | %.3f | %.2f (%llu) | %.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.1f%% | %.0f | %.0f | ", s.name.c_str(),
               static_cast<unsigned long long>(s.steps), ms(s.detect), 1e3 * s.peak,
               static_cast<unsigned long long>(s.peak_step), ms(s.prepare), ms(s.full), ms(s.walks), ms(s.gather),
-              double(s.pairs) / n, percent(s.pairs_full), percent(s.fallbacks), double(s.rays) / n,
+              double(s.pairs) / n, percent(s.pairs_full), percent(s.fallbacks), double(s.counts.rays()) / n,
               double(s.contacts) / n);
   if (s.judged == 0) {
     std::printf("– |\n");
@@ -138,7 +137,7 @@ int run_replay(const ReplayOptions& o) {
     for (const Sum& s : sums) std::printf(" %.0f |", double(s.counts.*c.field) / double(std::max<uint64_t>(s.steps, 1)));
     std::printf("\n");
   }
-  std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats); sent back: pairs traced in full because equation 2.1 ended their walks (the others traced in full are new).\n");
+  std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats); sent back: pairs traced in full because equation 2.1 ended their walks (the others traced in full are new); rays: vertex rays traced in full, predictive and walked (RayCounts::rays; edge rays are counted apart).\n");
   return 0;
 }
 

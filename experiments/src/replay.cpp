@@ -65,7 +65,6 @@ class OursRunner final : public Runner {
     out.pairs_iterative = s.pairs_iterative;
     out.fallbacks = s.fallbacks_to_full;
     out.counts = s;
-    out.rays = s.rays_full + s.rays_predictive + s.rays_iterative;
     out.bytes_to_device = s.bytes_to_device;
     out.bytes_from_device = s.bytes_from_device;
     out.device_rays.clear();

@@ -68,6 +68,22 @@ TEST_P(Edges, PlanksLaidCrosswise) {
   }
 }
 
+// A bar's edges against a sphere are tested in closed form, every step:
+// none casts a ray, and none is skipped.
+TEST_P(Edges, ClosedFormTestsAreNeverSkipped) {
+  Config config;
+  config.mode = Mode::iterative;
+  auto r = rig(bar_mesh(0.5, 0.05, 0.05), std::make_shared<Shape>(Sphere{0.3}), config);
+  for (int step = 0; step < 3; ++step) {
+    SCOPED_TRACE("step " + std::to_string(step));
+    const StepResult res = r.step(Pose{}, at(0, 0, 0.33 - 0.001 * step));
+    EXPECT_TRUE(res.pairs[0].colliding);
+    EXPECT_GT(res.stats.edges_tested, 0u);
+    EXPECT_EQ(res.stats.edge_rays, 0u);
+    EXPECT_EQ(res.stats.edges_skipped, 0u);
+  }
+}
+
 // A ring sinking into a bar as it turns and slides: the bar's top edges
 // cross the ring's tube with no vertex inside. A walking step tests a
 // watched edge only once the pair has moved its clearance, and finds each

@@ -293,6 +293,14 @@ TEST(Bench, WritesEveryTable) {
   EXPECT_NE(rows[1].find("8 points per pair"), std::string::npos) << rows[1];
   EXPECT_NE(rows[2].find("as the thesis ran (no speculative contacts, 4 points per pair)"), std::string::npos) << rows[2];
   EXPECT_EQ(rows[2].find("blew up"), std::string::npos) << rows[2];
+  // The projected depth of the same simulations, the thesis' two among them.
+  std::ifstream tp(fs::path(o.out) / "projected_interpenetration.csv");
+  std::string header, figures;
+  std::getline(tp, header);
+  std::getline(tp, figures);
+  EXPECT_NE(header.find("standard (as the thesis ran),projected (as the thesis ran)"), std::string::npos) << header;
+  EXPECT_EQ(std::count(figures.begin(), figures.end(), '('), 7) << figures;
+  EXPECT_EQ(figures.find("blew up"), std::string::npos) << figures;
   // Replaying the recording gives the same tables' shape without simulating it again.
   experiments::BenchOptions again = o;
   again.scene.clear();

@@ -104,6 +104,9 @@ struct RayCounts {
   std::array<size_t, kLineStatusCount> walk_endings{};  // iterative rays by how their line ended (line_status_name)
 
   RayCounts& operator+=(const RayCounts& other);
+  // The vertex rays: traced in full, predictive and walked (the replay
+  // tables' "rays"); edge rays are counted apart.
+  size_t rays() const { return rays_full + rays_predictive + rays_iterative; }
 };
 
 struct RayCounter {
@@ -133,7 +136,7 @@ inline constexpr RayCounter kRayCounters[] = {
     {"edges_tested", &RayCounts::edges_tested,
      "edges (and spheres' deepest points) taken for a crossing test (Config::edge_contacts)"},
     {"edges_skipped", &RayCounts::edges_skipped,
-     "of those, watched edges that needed no ray: farther from the surface than the pair has moved"},
+     "of those, watched mesh edges that needed no ray: farther from the surface than the pair has moved, or none within reach"},
     {"edge_rays", &RayCounts::edge_rays,
      "rays those tests cast"},
     {"edge_contacts", &RayCounts::edge_contacts,

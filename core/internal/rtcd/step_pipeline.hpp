@@ -77,10 +77,11 @@ struct RayTally : RayCounts {
     rays_watched += o.kind == RTCD_RAY_WATCHED;
     if (o.edge) {
       ++edges_tested;
-      // A watched edge that needs no ray (clear of the surface by more than
-      // the pair has moved, or found clear by its first walking step's
-      // nearest query) casts nothing.
-      edges_skipped += o.edge == RTCD_ITEM_EDGE && o.edge_rays == 0;
+      // A watched mesh edge that needs no ray: clear of the surface by more
+      // than the pair has moved (its clearance rides in entry), or found
+      // clear by its first walking step's nearest query. An edge against a
+      // sphere or a box, tested in closed form, casts none either.
+      edges_skipped += o.edge == RTCD_ITEM_EDGE && o.edge_rays == 0 && (o.nearest_query || o.entry >= 0);
       edge_rays += o.edge_rays;
       nearest_queries += o.nearest_query;
       edge_contacts += o.kind == RTCD_RAY_PENETRATING;
