@@ -54,7 +54,8 @@ constexpr const char* kCsvHeader =
 void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
   out << r.step << ',' << r.time << ',' << r.bodies << ',' << r.seconds_broad << ',' << r.seconds_narrow << ','
       << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total << ',' << r.pairs << ',' << r.pairs_full
-      << ',' << r.pairs_iterative << ',' << r.rays_full << ',' << r.rays_predictive << ',' << r.rays_iterative << ','
+      << ',' << r.pairs_iterative << ',' << r.rays.rays_full << ',' << r.rays.rays_predictive << ',' << r.rays.rays_iterative
+      << ','
       << r.contacts << ',' << r.predictive << ',' << r.solver_points << ',' << r.speculative_points << ','
       << r.kinetic_energy << ',';
   if (r.interpenetration >= 0) out << r.interpenetration << ',' << r.projected << ',' << r.deepest;
@@ -123,7 +124,7 @@ int run_scene(const RunOptions& o, fs::path* folder) {
       totals.effects += r.seconds_effects;
       totals.total += r.seconds_total;
       totals.pairs += double(r.pairs);
-      totals.rays += double(r.rays_full + r.rays_predictive + r.rays_iterative);
+      totals.rays += double(r.rays.rays());
       totals.contacts += double(r.contacts);
       device_rays.resize(std::max(device_rays.size(), r.device_rays.size()));
       for (size_t d = 0; d < r.device_rays.size(); ++d) device_rays[d] += r.device_rays[d];

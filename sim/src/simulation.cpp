@@ -494,9 +494,7 @@ const StepRecord& Simulation::step() {
     r.pairs = batch.pairs;
     r.pairs_full = n.stats.pairs_full;
     r.pairs_iterative = n.stats.pairs_iterative;
-    r.rays_full = n.stats.rays_full;
-    r.rays_predictive = n.stats.rays_predictive;
-    r.rays_iterative = n.stats.rays_iterative;
+    r.rays = n.stats;
     r.device_rays.clear();
     for (const DeviceWork& d : n.stats.devices) r.device_rays.push_back(d.rays);
     r.cpu_fallback = n.stats.cpu_fallback;

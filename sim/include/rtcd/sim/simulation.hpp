@@ -41,7 +41,7 @@ struct StepRecord {
   size_t bodies = 0;
   double seconds_broad = 0, seconds_narrow = 0, seconds_solver = 0, seconds_effects = 0, seconds_total = 0;
   size_t pairs = 0, pairs_full = 0, pairs_iterative = 0;
-  size_t rays_full = 0, rays_predictive = 0, rays_iterative = 0;
+  RayCounts rays;  // the narrow phase's, as it counted them (zero under GIMPACT)
   size_t contacts = 0, predictive = 0, solver_points = 0, speculative_points = 0;
   size_t ground_contacts = 0;  // contacts between a body and the ground
   std::vector<size_t> device_rays;  // the rays each device of the backend ran (empty on the CPU backends)
