@@ -60,8 +60,8 @@ struct Config {
   // of the two faces they found: a concave target can fold between them,
   // and a vertex that moved out into such a gap would be reported at a
   // stale depth. Default on; skipped against convex meshes. Cost: one ray
-  // no longer than that distance per walked contact; 1.5-1.8x the time of
-  // an iterative step of concave blobs in steady contact.
+  // no longer than that distance per walked contact beyond its face's
+  // clearance (fold.h), which most contacts lie within.
   bool verify_walks = true;
 
   // Test each edge of the source against the target too: two surfaces can
