@@ -180,6 +180,8 @@ int main(int argc, char** argv) {
   replay->add_option("--mode", ro.mode, "full, iterative or auto (default: auto)");
   replay->add_option("--threads", ro.threads, "Worker threads (default: 1)")->check(CLI::Range(1, 4096));
   replay->add_option("--judge-every", ro.judge_every, "Judge rays by the exact reference every k-th step (default: never)");
+  replay->add_option("--last", ro.last, "Also sum the recording's last N steps, in a row of their own (default: none)")
+      ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   rtcd::cli::add_knobs(*replay, ro.knobs);
 
   try {

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <string>
 
 #include "console.hpp"
 #include "rtcd/error.hpp"
@@ -91,6 +92,9 @@ void print_devices(const experiments::ReplayRun& run) {
 int run_replay(const ReplayOptions& o) {
   const sim::Recording recording = sim::Recording::read(o.recording);
   if (recording.steps().empty()) throw UsageError(o.recording + ": holds no steps");
+  if (o.last > recording.steps().size())
+    throw UsageError("--last " + std::to_string(o.last) + ": " + o.recording + " holds only " +
+                     std::to_string(recording.steps().size()) + " steps");
   experiments::ReplayConfig c;
   c.label = o.backend + " " + o.mode;
   c.backend = o.backend;
@@ -120,6 +124,11 @@ int run_replay(const ReplayOptions& o) {
     for (uint64_t k = 0; k < run.steps.size(); ++k)
       if (phases.of(k) == phase) sum.add(k, run.steps[k]);
     if (sum.steps > 0) sums.push_back(sum);
+  }
+  if (o.last > 0) {
+    Sum& tail = sums.emplace_back();
+    tail.name = "last " + std::to_string(o.last);
+    for (uint64_t k = run.steps.size() - o.last; k < run.steps.size(); ++k) tail.add(k, run.steps[k]);
   }
   Sum& all = sums.emplace_back();
   all.name = "all";

@@ -15,6 +15,7 @@ struct ReplayOptions {
   std::string mode = "auto";
   int threads = 1;
   uint64_t judge_every = 0;  // 0: no step judged
+  uint64_t last = 0;         // > 0: a row for the recording's last steps too (a stream never settles)
   Knobs knobs;               // set ones replace the recorded scene's
 };
 

@@ -274,6 +274,14 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   const double traced_in_full = std::stod(cells[9]), sent_back = std::stod(cells[10]);
   EXPECT_GT(sent_back, 0.0) << automatic.out;
   EXPECT_LE(sent_back, traced_in_full) << automatic.out;
+  // The recording's last steps summed apart (a stream has no settled
+  // phase): a row of exactly that many steps, before the whole.
+  const Outcome tail = run("replay " + recording + " --last 7");
+  ASSERT_EQ(tail.code, 0) << tail.out;
+  const size_t last = tail.out.find("| last 7 | 7 |");
+  ASSERT_NE(last, std::string::npos) << tail.out;
+  EXPECT_LT(last, tail.out.find("| all | 60 |")) << tail.out;
+  EXPECT_NE(tail.out.find("| counter (per step) | A | B | last 7 | all |"), std::string::npos) << tail.out;
 
   const std::string junk = write("junk.rtcdrec", "RTCDREC1 and then nothing sensible");
   for (const auto& [args, fragment] : std::vector<std::pair<std::string, std::string>>{
@@ -285,7 +293,8 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
            {"bench avalanche --steps 0", "steps"},
            {"replay " + junk, "junk.rtcdrec"},
            {"replay " + out + "/recording.rtcdrec --mode sideways", "sideways"},
-           {"replay " + out + "/recording.rtcdrec --backend nosuch", "nosuch"}}) {
+           {"replay " + out + "/recording.rtcdrec --backend nosuch", "nosuch"},
+           {"replay " + out + "/recording.rtcdrec --last 61", "holds only 60 steps"}}) {
     const Outcome bad = run(args);
     EXPECT_EQ(bad.code, 2) << args << "\n" << bad.out;
     EXPECT_NE(bad.out.find(fragment), std::string::npos) << args << "\n" << bad.out;
