@@ -32,7 +32,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join("docs", "results")
 
 # The folders, in the order docs/results/README.md lists them.
-FOLDERS = ["run", "avalanche", "stream", "validation", "opencl", "threshold-sweep", "accuracy-sweep", "edges",
+FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "opencl", "threshold-sweep", "accuracy-sweep", "edges",
            "python"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
@@ -237,13 +237,56 @@ def stream_rows():
         fcl.append(number(one["FCL ÷ it, median"], where))
     report = "stream/report.md"
     return [
-        Row("stream: ray time, full Embree → automatic, last 300 steps (1 thread)",
+        Row("stream: ray time, full Embree → automatic, the last 300 steps full Embree reached in the bench's "
+            "budget (1 thread)",
             f"{span(full, f2)} → {span(auto, f2)} ms: {span(speedup, f2)}× "
             f"(steps {', '.join(sorted(steps))}, {', '.join(sorted(bodies))} bodies)",
             "stream", report, metas),
         Row("stream: GIMPACT ÷ rtcd, FCL ÷ rtcd, median step (1 thread)",
             f"{span(gimpact, g)}×, {span(fcl, g)}×", "stream", report, metas),
     ]
+
+
+def replay_row(folder, name, label):
+    """One row of an `rtcd replay` table (the row whose first cell is label)
+    as (steps, detect ms, ray time ms: full tracing + walks, pairs)."""
+    for line in read_text(folder, name).splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if cells and cells[0] == label:
+            where = f"{RESULTS}/{folder}/{name}"
+            if len(cells) < 9:
+                raise ResultError(f"{where}: row '{label}' is short")
+            return (int(number(cells[1], where)), number(cells[2], where),
+                    number(cells[5], where) + number(cells[6], where), number(cells[8], where))
+    raise ResultError(f"{RESULTS}/{folder}/{name}: no row '{label}'")
+
+
+def median(values):
+    v = sorted(values)
+    return v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+
+
+def stream_end_rows():
+    """The stream's own last 300 steps: full and automatic replays, one
+    thread, interleaved (full_K.txt, auto_K.txt), medians of the rounds."""
+    folder = "stream-end"
+    m = meta(folder)
+    rounds = sorted(n[len("full_"):-len(".txt")] for n in os.listdir(path_of(folder))
+                    if n.startswith("full_") and n.endswith(".txt"))
+    if not rounds:
+        raise ResultError(f"{RESULTS}/{folder}: no full_K.txt")
+    full, auto, ratio, pairs = [], [], [], set()
+    for k in rounds:
+        steps, _, f, p = replay_row(folder, f"full_{k}.txt", "last 300")
+        _, _, a, _ = replay_row(folder, f"auto_{k}.txt", "last 300")
+        full.append(f)
+        auto.append(a)
+        ratio.append(f / a)
+        pairs.add(f"{p:.0f}")
+    return [Row("stream: ray time, full Embree → automatic, the recording's last 300 steps (1 thread)",
+                f"{median(full):.2f} → {median(auto):.2f} ms: {median(ratio):.2f}× "
+                f"(medians of {len(rounds)} interleaved replays; {', '.join(sorted(pairs))} pairs a step)",
+                folder, f"{folder}/README.md", [m])]
 
 
 def validation_rows():
@@ -347,7 +390,8 @@ def python_rows():
 
 
 def all_rows():
-    return run_rows() + avalanche_rows() + stream_rows() + validation_rows() + opencl_rows() + python_rows()
+    return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + opencl_rows()
+            + python_rows())
 
 
 # ---------------------------------------------------------------- blocks
