@@ -37,6 +37,11 @@ bash scripts/deps.sh
 cmake --preset asan >/dev/null
 cmake --build --preset asan
 export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp}
-export ASAN_OPTIONS=${ASAN_OPTIONS:-fast_unwind_on_malloc=0}
+# intercept_tls_get_addr=0: LeakSanitizer's exit check reads the dynamic TLS
+# blocks it saw through __tls_get_addr, and with Debian 12's glibc
+# (2.36-9+deb12u14) one of them is bogus after PoCL's threads ran: the check
+# crashed on every run of some OpenCL tests (Conformance.CubeSunkIntoHalfSpace),
+# after they passed. Leaks are still checked from stacks, static TLS and globals.
+export ASAN_OPTIONS=${ASAN_OPTIONS:-fast_unwind_on_malloc=0:intercept_tls_get_addr=0}
 ctest --preset asan -j2 -LE "differential|consumer" \
   -E "^Backends/Robustness\.[A-Za-z]+/(basic|opencl_basic)( |$)|^Backends/Robustness\.(HighResolutionTarget|TinyHugeAndFarBodies)/|^Backends/Metamorphic\.[A-Za-z]+/opencl|^Bench\.WritesEveryTable|^OpenCl\.BvhMissesNothingInFullMode|^CliFiles\.BenchRunsTheSmallStream|^Robustness\.EmbreeInstructionSets|^Backends/Robustness\.DeterministicAcrossRunsAndThreadCounts/(embree|opencl)( |$)|^SimCli\.CommittedScenesRunAndBadScenesExit2|^Mass\.TorusMatchesClosedForm" --timeout 600 "$@"
