@@ -54,10 +54,9 @@ constexpr const char* kCsvHeader =
 void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
   out << r.step << ',' << r.time << ',' << r.bodies << ',' << r.seconds_broad << ',' << r.seconds_narrow << ','
       << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total << ',' << r.pairs << ',' << r.pairs_full
-      << ',' << r.pairs_iterative << ',' << r.rays.rays_full << ',' << r.rays.rays_predictive << ',' << r.rays.rays_iterative
-      << ','
-      << r.contacts << ',' << r.predictive << ',' << r.solver_points << ',' << r.speculative_points << ','
-      << r.kinetic_energy << ',';
+      << ',' << r.pairs_iterative << ',' << r.rays.rays_full << ',' << r.rays.rays_predictive << ','
+      << r.rays.rays_iterative << ',' << r.contacts << ',' << r.predictive << ',' << r.solver_points << ','
+      << r.speculative_points << ',' << r.kinetic_energy << ',';
   if (r.interpenetration >= 0) out << r.interpenetration << ',' << r.projected << ',' << r.deepest;
   else out << ",,";
   out << '\n';

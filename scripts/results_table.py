@@ -32,8 +32,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join("docs", "results")
 
 # The folders, in the order docs/results/README.md lists them.
-FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "opencl", "threshold-sweep", "accuracy-sweep", "edges",
-           "python"]
+FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "opencl", "threshold-sweep", "accuracy-sweep",
+           "edges", "python"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
 
@@ -247,45 +247,38 @@ def stream_rows():
     ]
 
 
-def replay_row(folder, name, label):
-    """One row of an `rtcd replay` table (the row whose first cell is label)
-    as (steps, detect ms, ray time ms: full tracing + walks, pairs)."""
+def replay_ray_time(folder, name, label):
+    """Ray time (full tracing + walks, ms) and pairs of one row of an
+    `rtcd replay` table, the row whose first cell is label."""
+    where = f"{RESULTS}/{folder}/{name}"
     for line in read_text(folder, name).splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]
-        if cells and cells[0] == label:
-            where = f"{RESULTS}/{folder}/{name}"
+        if cells[0] == label:
             if len(cells) < 9:
                 raise ResultError(f"{where}: row '{label}' is short")
-            return (int(number(cells[1], where)), number(cells[2], where),
-                    number(cells[5], where) + number(cells[6], where), number(cells[8], where))
-    raise ResultError(f"{RESULTS}/{folder}/{name}: no row '{label}'")
-
-
-def median(values):
-    v = sorted(values)
-    return v[len(v) // 2] if len(v) % 2 else 0.5 * (v[len(v) // 2 - 1] + v[len(v) // 2])
+            return number(cells[5], where) + number(cells[6], where), number(cells[8], where)
+    raise ResultError(f"{where}: no row '{label}'")
 
 
 def stream_end_rows():
-    """The stream's own last 300 steps: full and automatic replays, one
-    thread, interleaved (full_K.txt, auto_K.txt), medians of the rounds."""
+    """The stream's own last 300 steps: rounds of a full and an automatic
+    replay run back to back (full_K.txt, auto_K.txt); the row gives the
+    round whose full ÷ automatic is the median, so its three figures agree."""
     folder = "stream-end"
     m = meta(folder)
     rounds = sorted(n[len("full_"):-len(".txt")] for n in os.listdir(path_of(folder))
                     if n.startswith("full_") and n.endswith(".txt"))
     if not rounds:
         raise ResultError(f"{RESULTS}/{folder}: no full_K.txt")
-    full, auto, ratio, pairs = [], [], [], set()
+    measured = []  # (ratio, full, auto, pairs) per round
     for k in rounds:
-        steps, _, f, p = replay_row(folder, f"full_{k}.txt", "last 300")
-        _, _, a, _ = replay_row(folder, f"auto_{k}.txt", "last 300")
-        full.append(f)
-        auto.append(a)
-        ratio.append(f / a)
-        pairs.add(f"{p:.0f}")
+        full, pairs = replay_ray_time(folder, f"full_{k}.txt", "last 300")
+        auto, _ = replay_ray_time(folder, f"auto_{k}.txt", "last 300")
+        measured.append((full / auto, full, auto, pairs))
+    ratio, full, auto, pairs = sorted(measured)[(len(measured) - 1) // 2]
     return [Row("stream: ray time, full Embree → automatic, the recording's last 300 steps (1 thread)",
-                f"{median(full):.2f} → {median(auto):.2f} ms: {median(ratio):.2f}× "
-                f"(medians of {len(rounds)} interleaved replays; {', '.join(sorted(pairs))} pairs a step)",
+                f"{full:.2f} → {auto:.2f} ms: {ratio:.2f}× (the median of {len(rounds)} rounds, "
+                f"{min(r[0] for r in measured):.2f}–{max(r[0] for r in measured):.2f}×; {pairs:.0f} pairs a step)",
                 folder, f"{folder}/README.md", [m])]
 
 

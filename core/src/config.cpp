@@ -85,7 +85,9 @@ const Knob kKnobs[] = {
      RTCD_FLAG_KNOB(verify_walks)},
     {"edge_contacts", KnobType::flag, 0, 0, "on",
      "test the source's edges too: surfaces that cross with no vertex inside (planks laid crosswise)",
-     "one to four rays per edge near the overlap, retested each walking step; 2.2x a full step of concave blobs, 2.9x a walking one", false,
+     "one to four rays per edge near the overlap, retested each walking step; 2.2x a full step of concave blobs, "
+     "2.9x a walking one",
+     false,
      RTCD_FLAG_KNOB(edge_contacts)},
     {"projected", KnobType::flag, 0, 0, "on",
      "push along the impacted triangle's normal by the projected depth (section 2.2), not along the ray",
