@@ -32,6 +32,10 @@ void print_row(const validation::Summary& s) {
                 "pair p50 %.2e p90 %.2e p99 %.2e max %.2e; full steps %.2f%% of %zu motion steps\n",
                 "", s.missed, s.deep, s.missed_untracked, s.missed_p50, s.missed_p90, s.missed_p99, s.missed_max,
                 s.motion_steps ? 100.0 * double(s.full_steps) / double(s.motion_steps) : 0.0, s.motion_steps);
+  std::printf("%-10s truth: %zu contacts, %zu deeper than 1.25x their true penetration; solver depth / true "
+              "p50 %.3f p99 %.3f max %.3f; push to nearest surface p50 %.1f deg p95 %.1f deg\n",
+              "", s.truth_checked, s.over_reports, s.truth_ratio_p50, s.truth_ratio_p99, s.truth_ratio_max,
+              s.push_angle_p50, s.push_angle_p95);
   if (s.ccd_pairs)
     std::printf("%-10s libccd on %zu convex pairs: our largest projected depth / libccd depth = %.3f on average, "
                 "mean |difference| %.4f; libccd %.1f us per pair\n",

@@ -41,8 +41,8 @@ namespace {
 static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // The kernels read the buffers with OpenCL C's layout of the same structs:
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
-static_assert(sizeof(rtcd_outcome) == 28 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 68);
-static_assert(sizeof(rtcd_device_job) == 92 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
+static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8);
 
 constexpr size_t kGroupSize = 64;

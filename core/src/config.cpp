@@ -89,6 +89,11 @@ const Knob kKnobs[] = {
      "2.9x a walking one",
      false,
      RTCD_FLAG_KNOB(edge_contacts)},
+    {"nearest_surface", KnobType::flag, 0, 0, "on",
+     "measure each contact's depth and push to the target's nearest surface point, not along its ray to where it "
+     "leaves the target",
+     "one nearest-triangle query per vertex contact, within its ray's exit distance", false,
+     RTCD_FLAG_KNOB(nearest_surface)},
     {"projected", KnobType::flag, 0, 0, "on",
      "push along the impacted triangle's normal by the projected depth (section 2.2), not along the ray",
      "none here; it changes what the solver receives", true, RTCD_FLAG_KNOB(projected)},

@@ -298,6 +298,7 @@ rtcd_trace_params make_trace_params(const RayJob& job, const Shape& source, cons
   // against spheres and boxes only.
   p.edges = config.edge_contacts && !std::holds_alternative<HalfSpace>(target.geometry()) &&
             !(p.source_radius > 0.0f && target.mesh());
+  p.nearest_surface = config.nearest_surface && target.mesh() != nullptr;
   return p;
 }
 

@@ -3,6 +3,8 @@
 
 #include <cmath>
 #include <map>
+#include <numeric>
+#include <set>
 #include <numbers>
 #include <random>
 #include <stdexcept>
@@ -250,6 +252,163 @@ Mesh u_shape(double scale, double half_depth) {
     t.push_back({i, j + 8, i + 8});
   }
   return make(p, t);
+}
+
+// Each triangle of a body star-shaped about the origin turned to face away
+// from it.
+Mesh facing_out(const std::vector<Eigen::Vector3d>& p, std::vector<Tri> t) {
+  for (Tri& tri : t)
+    if ((p[tri[1]] - p[tri[0]]).cross(p[tri[2]] - p[tri[0]]).dot(p[tri[0]] + p[tri[1]] + p[tri[2]]) < 0)
+      std::swap(tri[1], tri[2]);
+  return make(p, t);
+}
+
+Mesh tetrahedron(double radius) {
+  const double k = radius / std::sqrt(3.0);
+  const std::vector<Eigen::Vector3d> p = {{k, k, k}, {k, -k, -k}, {-k, k, -k}, {-k, -k, k}};
+  return facing_out(p, {{0, 1, 2}, {0, 1, 3}, {0, 2, 3}, {1, 2, 3}});
+}
+
+Mesh octahedron(double radius) {
+  const std::vector<Eigen::Vector3d> p = {{radius, 0, 0}, {-radius, 0, 0}, {0, radius, 0},
+                                          {0, -radius, 0}, {0, 0, radius}, {0, 0, -radius}};
+  std::vector<Tri> t;
+  for (uint32_t x : {0u, 1u})
+    for (uint32_t y : {2u, 3u})
+      for (uint32_t z : {4u, 5u}) t.push_back({x, y, z});
+  return facing_out(p, t);
+}
+
+Mesh torus_knot(int pk, int qk, double radius, double tube_radius, int segments, int sides) {
+  if (pk < 1 || qk < 1 || std::gcd(pk, qk) != 1 || segments < 3 || sides < 3 || !(tube_radius > 0) || !(radius > 0))
+    throw UsageError("torus_knot needs coprime p, q >= 1, >= 3 segments and sides, and positive radii");
+  const double minor = 0.5 * radius;
+  auto curve = [&](double s) {
+    const double r = radius + minor * std::cos(qk * s);
+    return Eigen::Vector3d(r * std::cos(pk * s), r * std::sin(pk * s), minor * std::sin(qk * s));
+  };
+  // Frenet frames from central differences: a torus knot's curvature never
+  // vanishes, and the frames close up with the curve (no seam).
+  const double h = 1e-4;
+  std::vector<Eigen::Vector3d> centre(segments), normal(segments), binormal(segments);
+  for (int i = 0; i < segments; ++i) {
+    const double s = 2 * pi * i / segments;
+    const Eigen::Vector3d c = curve(s), d1 = (curve(s + h) - curve(s - h)) / (2 * h);
+    const Eigen::Vector3d d2 = (curve(s + h) - 2 * c + curve(s - h)) / (h * h);
+    const Eigen::Vector3d tangent = d1.normalized();
+    centre[i] = c;
+    normal[i] = (d2 - d2.dot(tangent) * tangent).normalized();
+    binormal[i] = tangent.cross(normal[i]);
+  }
+  // The tube must not meet itself: the curve's points farther apart along it
+  // than the tube's girth stay more than a diameter apart.
+  const double step = 2 * pi / segments;
+  for (int i = 0; i < segments; ++i)
+    for (int j = i + 1; j < segments; ++j) {
+      const int apart = std::min(j - i, segments - (j - i));
+      if (apart * step * radius > 4 * tube_radius && (centre[i] - centre[j]).norm() < 2.2 * tube_radius)
+        throw UsageError("torus_knot: the tube is too thick for its knot and would cut itself");
+    }
+  std::vector<Eigen::Vector3d> p;
+  std::vector<Tri> t;
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      const double v = 2 * pi * j / sides;
+      // cos v * N - sin v * B runs the way that makes the triangles below face out.
+      p.push_back(centre[i] + tube_radius * (std::cos(v) * normal[i] - std::sin(v) * binormal[i]));
+    }
+  auto at = [&](int i, int j) { return uint32_t((i % segments) * sides + (j % sides)); };
+  for (int i = 0; i < segments; ++i)
+    for (int j = 0; j < sides; ++j) {
+      t.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      t.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return make(p, t);
+}
+
+Mesh gear(int teeth, double root_radius, double tip_radius, double half_thickness) {
+  if (teeth < 3 || !(root_radius > 0) || !(tip_radius > root_radius) || !(half_thickness > 0))
+    throw UsageError("gear needs >= 3 teeth, tip_radius > root_radius > 0 and a positive thickness");
+  // The outline, counter-clockwise: per tooth a root, two tip corners and a root.
+  std::vector<Eigen::Vector2d> outline;
+  const double fractions[4] = {0.0, 0.25, 0.5, 0.75}, radii[4] = {root_radius, tip_radius, tip_radius, root_radius};
+  for (int k = 0; k < teeth; ++k)
+    for (int c = 0; c < 4; ++c) {
+      const double a = 2 * pi * (k + fractions[c]) / teeth;
+      outline.emplace_back(radii[c] * std::cos(a), radii[c] * std::sin(a));
+    }
+  const uint32_t n = uint32_t(outline.size());
+  std::vector<Eigen::Vector3d> p;
+  for (double z : {-half_thickness, half_thickness})
+    for (const auto& o : outline) p.emplace_back(o.x(), o.y(), z);
+  p.emplace_back(0, 0, -half_thickness);
+  p.emplace_back(0, 0, half_thickness);
+  const uint32_t bottom = 2 * n, top = 2 * n + 1;
+  std::vector<Tri> t;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t j = (i + 1) % n;
+    t.push_back({top, i + n, j + n});  // the outline is star-shaped about the axis: fans
+    t.push_back({bottom, j, i});
+    t.push_back({i, j, j + n});
+    t.push_back({i, j + n, i + n});
+  }
+  return make(p, t);
+}
+
+Mesh voxels(std::span<const std::array<int, 3>> cells, double cell) {
+  if (cells.empty() || !(cell > 0)) throw UsageError("voxels needs at least one cell and a positive cell size");
+  std::set<std::array<int, 3>> filled(cells.begin(), cells.end());
+  auto has = [&](int x, int y, int z) { return filled.count({x, y, z}) > 0; };
+  // Cells that share an edge (or a corner) and no face with anything
+  // filled between them pinch the surface.
+  for (const auto& c : filled)
+    for (int dx = -1; dx <= 1; ++dx)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dz = -1; dz <= 1; ++dz) {
+          if (std::abs(dx) + std::abs(dy) + std::abs(dz) < 2 || !has(c[0] + dx, c[1] + dy, c[2] + dz)) continue;
+          // Some path of face steps inside the cube spanned by the two cells.
+          const bool joined = (dx && has(c[0] + dx, c[1], c[2]) && (has(c[0] + dx, c[1] + dy, c[2]) || has(c[0] + dx, c[1], c[2] + dz))) ||
+                              (dy && has(c[0], c[1] + dy, c[2]) && (has(c[0] + dx, c[1] + dy, c[2]) || has(c[0], c[1] + dy, c[2] + dz))) ||
+                              (dz && has(c[0], c[1], c[2] + dz) && (has(c[0] + dx, c[1], c[2] + dz) || has(c[0], c[1] + dy, c[2] + dz)));
+          if (!joined)
+            throw UsageError("voxels: cells meet along an edge or at a corner only");
+        }
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(1e300), hi = -lo;
+  for (const auto& c : filled)
+    for (int k = 0; k < 3; ++k) lo[k] = std::min(lo[k], double(c[k])), hi[k] = std::max(hi[k], double(c[k] + 1));
+  const Eigen::Vector3d middle = 0.5 * (lo + hi);
+  std::map<std::array<int, 3>, uint32_t> corner_ids;
+  std::vector<Eigen::Vector3d> p;
+  auto corner = [&](int x, int y, int z) {
+    auto [it, inserted] = corner_ids.try_emplace({x, y, z}, uint32_t(p.size()));
+    if (inserted) p.push_back(cell * (Eigen::Vector3d(x, y, z) - middle));
+    return it->second;
+  };
+  // The faces of box(), each with the neighbour behind it: +x, -x, +y, -y, +z, -z.
+  const int faces[6][4] = {{1, 3, 7, 5}, {0, 4, 6, 2}, {2, 6, 7, 3}, {0, 1, 5, 4}, {4, 5, 7, 6}, {0, 2, 3, 1}};
+  const int behind[6][3] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+  std::vector<Tri> t;
+  for (const auto& c : filled)
+    for (int f = 0; f < 6; ++f) {
+      if (has(c[0] + behind[f][0], c[1] + behind[f][1], c[2] + behind[f][2])) continue;
+      uint32_t q[4];
+      for (int k = 0; k < 4; ++k) {
+        const int i = faces[f][k];
+        q[k] = corner(c[0] + (i & 1), c[1] + ((i >> 1) & 1), c[2] + ((i >> 2) & 1));
+      }
+      t.push_back({q[0], q[1], q[2]});
+      t.push_back({q[0], q[2], q[3]});
+    }
+  return make(p, t);
+}
+
+Mesh cactus(double height) {
+  const std::array<int, 3> cells[] = {
+      {0, 0, 0},  {0, 0, 1},  {0, 0, 2},  {0, 0, 3},  {0, 0, 4},  {0, 0, 5},  {0, 0, 6},   // the trunk
+      {-1, 0, 2}, {-2, 0, 2}, {-2, 0, 3}, {-2, 0, 4},                                    // left arm
+      {1, 0, 3},  {2, 0, 3},  {2, 0, 4},  {2, 0, 5},                                     // right arm
+      {0, -1, 1}, {0, -2, 1}, {0, -2, 2}, {0, -2, 3}};                                   // front arm
+  return voxels(cells, height / 7.0);
 }
 
 }  // namespace rtcd::gen

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <limits>
 #include <optional>
 
 #include <tbb/task_arena.h>
@@ -86,6 +87,21 @@ struct ShapeEntry {
     return n;
   }
 
+  // The face nearest to p, a point inside: for a mesh the executor finds it
+  // (RayOutcome::nearest), and `exit` (the face the ray left through) stands
+  // in; a box's face with the least room; a sphere's or a half-space's one.
+  int32_t nearest_face(int32_t exit, const Eigen::Vector3d& p) const {
+    const auto* box = std::get_if<Box>(&shape->geometry());
+    if (!box) return exit;
+    int32_t best = exit;
+    double room = std::numeric_limits<double>::infinity();
+    for (int32_t face = 0; face < 6; ++face) {
+      const double r = box->half_extents[face / 2] - (face % 2 == 0 ? p[face / 2] : -p[face / 2]);
+      if (r < room) room = r, best = face;
+    }
+    return best;
+  }
+
   // The point of face `face` nearest to p (this shape's frame), in double:
   // an edge contact's way out. Mesh: the triangle's closest point; box: p
   // moved onto the face's plane; sphere: p pushed out along its radius.
@@ -97,6 +113,7 @@ struct ShapeEntry {
     }
     if (const auto* sphere = std::get_if<Sphere>(&shape->geometry()))
       return p.isZero() ? Eigen::Vector3d(0, 0, sphere->radius) : Eigen::Vector3d(p.normalized() * sphere->radius);
+    if (std::holds_alternative<HalfSpace>(shape->geometry())) return {p.x(), p.y(), 0.0};
     Eigen::Vector3d q = p;
     q[face / 2] = (face % 2 == 0 ? 1.0 : -1.0) * std::get<Box>(shape->geometry()).half_extents[face / 2];
     return q;
@@ -205,6 +222,8 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive) const;
   void fill_edge(const RayJob& job, const RayOutcome& o, BodyId source, BodyId target, Side side, Contact& c) const;
+  void measure_out(const ShapeEntry& target, int32_t face, const Eigen::Vector3d& p,
+                   const Eigen::Matrix3d& target_rotation, Contact& c) const;
 
   std::string name_;
   std::vector<std::string> devices_;
@@ -469,7 +488,11 @@ void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> ou
     // Rotations of unit vectors: unit to double precision.
     r.direction = source_rotation * direction;
     r.normal = target_rotation * target.exit_normal(o.triangle, p + t * d);
-    if (penetrating) {
+    if (penetrating && config_.nearest_surface) {
+      // The ray proved the vertex inside; the way out is the nearest surface.
+      measure_out(target, o.nearest >= 0 ? o.nearest : target.nearest_face(o.triangle, p), p, target_rotation,
+                  *contacts++);
+    } else if (penetrating) {
       Contact& c = *contacts++;
       c.depth = t;
       c.projected_depth = t * std::abs(r.direction.dot(r.normal));
@@ -512,18 +535,26 @@ void PipelineNarrowPhase::fill_edge(const RayJob& job, const RayOutcome& o, Body
     c.vertex = e[0];
     c.edge = e;
   }
-  const Eigen::Vector3d out = target.nearest_on_face(o.triangle, p) - p;
-  const Eigen::Matrix3d target_rotation = dst.pose.orientation.toRotationMatrix();
-  const Eigen::Vector3d normal = target.exit_normal(o.triangle, p + out);
   c.source = side;
   c.source_body = source_id;
   c.target_body = target_id;
-  c.triangle = o.triangle;
   c.origin = dst.pose.orientation * p + dst.pose.position;
+  measure_out(target, o.triangle, p, dst.pose.orientation.toRotationMatrix(), c);
+}
+
+// A contact's way out to the nearest point of the target's face `face` from
+// p (the target's frame), in double: its face, depth, direction, normal and
+// push. The normal is the surface's at that point: the way out itself (the
+// face's normal where the point lies inside the face; on a valley's edge or
+// corner, where faces meet, the way out is the normal there). On the
+// surface already (touching): out along the face's normal.
+void PipelineNarrowPhase::measure_out(const ShapeEntry& target, int32_t face, const Eigen::Vector3d& p,
+                                      const Eigen::Matrix3d& target_rotation, Contact& c) const {
+  const Eigen::Vector3d out = target.nearest_on_face(face, p) - p;
+  c.triangle = face;
   c.depth = out.norm();
-  // On the surface already (touching): out along the face's normal.
-  c.direction = target_rotation * (c.depth > 0.0 ? Eigen::Vector3d(out / c.depth) : normal);
-  c.normal = target_rotation * normal;
+  c.direction = target_rotation * (c.depth > 0.0 ? Eigen::Vector3d(out / c.depth) : target.exit_normal(face, p));
+  c.normal = c.direction;
   c.projected_depth = c.depth * std::abs(c.direction.dot(c.normal));
   c.push = config_.projected ? Eigen::Vector3d(c.normal * c.projected_depth) : Eigen::Vector3d(c.direction * c.depth);
 }

@@ -190,7 +190,8 @@ struct ExactShape::Tree {
 
   // Squared distance to the nearest triangle, searching only closer than
   // `bound` (squared): a caller that needs only "nearer than r?" stops early.
-  double squared_distance(const Vec& p, double bound) const {
+  // `closest`, when given, receives the nearest point found.
+  double squared_distance(const Vec& p, double bound, Vec* closest = nullptr) const {
     double best = bound;
     int32_t stack[128];
     int top = 0;
@@ -201,7 +202,11 @@ struct ExactShape::Tree {
       if (n.left < 0) {
         for (uint32_t i = n.first; i < n.first + n.count; ++i) {
           const auto& tri = triangles[order[i]];
-          best = std::min(best, (closest_on_triangle(p, corner(tri, 0), corner(tri, 1), corner(tri, 2)) - p).squaredNorm());
+          const Vec q = closest_on_triangle(p, corner(tri, 0), corner(tri, 1), corner(tri, 2));
+          if (const double d2 = (q - p).squaredNorm(); d2 < best) {
+            best = d2;
+            if (closest) *closest = q;
+          }
         }
         continue;
       }
@@ -243,6 +248,26 @@ double ExactShape::distance(const Vec& p) const {
   const Vec q = p.cwiseAbs() - h;
   if ((q.array() <= 0).all()) return -q.maxCoeff();
   return q.cwiseMax(0.0).norm();
+}
+
+Vec ExactShape::closest_point(const Vec& p) const {
+  if (tree_) {
+    Vec q = p;
+    tree_->squared_distance(p, kInf, &q);
+    return q;
+  }
+  if (const auto* s = std::get_if<Sphere>(&shape_->geometry()))
+    return p.isZero() ? Vec(0, 0, s->radius) : Vec(p.normalized() * s->radius);
+  if (std::holds_alternative<HalfSpace>(shape_->geometry())) return {p.x(), p.y(), 0.0};
+  const Vec& h = std::get<Box>(shape_->geometry()).half_extents;
+  const Vec clamped = p.cwiseMax(-h).cwiseMin(h);
+  if (clamped != p) return clamped;  // outside: the box's nearest point
+  // Inside: onto the face with the least room.
+  Eigen::Index axis = 0;
+  (h - p.cwiseAbs()).minCoeff(&axis);
+  Vec q = p;
+  q[axis] = p[axis] < 0.0 ? -h[axis] : h[axis];
+  return q;
 }
 
 bool ExactShape::within(const Vec& p, double radius) const {
@@ -303,6 +328,7 @@ std::vector<ExactRay> ExactShape::rays_from(const Shape& source, const Pose& sou
     r.near_surface = within(p, margin);
     r.inside = closed() && inside(p);
     if (r.inside) {
+      r.penetration = distance(p);
       const Vec d = (rotation * rs.directions[i].cast<double>()).normalized();
       double t;
       if (first_hit(p, d, t, r.triangle)) r.depth = t;

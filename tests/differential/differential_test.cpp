@@ -100,6 +100,15 @@ TEST_P(Differential, BoundsHold) {
     report_first(family, r, o, [](const PairMetrics& m) { return m.false_rays > 0; }, "false ray");
     EXPECT_LE(s.max_relative_depth_error, 1e-4);
     report_first(family, r, o, [](const PairMetrics& m) { return m.max_relative_depth_error > 1e-4; }, "depth error");
+    // Every contact true to the penetration: no solver depth beyond 1.25x
+    // the distance to the target's nearest surface (+1e-3 of the smaller
+    // body), pushes toward that surface.
+    EXPECT_GT(s.truth_checked, 0u);
+    EXPECT_EQ(s.over_reports, 0u) << "of " << s.truth_checked << " contacts; solver depth / true max "
+                                  << s.truth_ratio_max;
+    report_first(family, r, o, [](const PairMetrics& m) { return m.over_reports > 0; }, "over-reported depth");
+    EXPECT_LE(s.push_angle_p50, 15.0);
+    EXPECT_LE(s.push_angle_p95, 45.0);
   } else {
     // The derived threshold may send a pair on a thin body back to full
     // tracing before the judged step (the price, reported as the full-step

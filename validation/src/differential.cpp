@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <iomanip>
+#include <numbers>
 #include <optional>
 #include <sstream>
 
@@ -27,16 +28,20 @@ struct OurRay {
 };
 
 // Judges one direction's rays against the exact reference.
+// A ray's depth is judged against what the contact claims to be: the
+// distance to the nearest surface (Config::nearest_surface) or the first
+// exit along the ray.
 void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>& ours, bool target_closed,
-           double epsilon, PairMetrics& m, double& depth_error_sum) {
+           bool nearest_surface, double epsilon, PairMetrics& m, double& depth_error_sum) {
   size_t inside = 0;
   for (size_t v = 0; v < exact.size(); ++v) {
     const oracle::ExactRay& e = exact[v];
     const bool penetrating = ours[v].depth >= 0.0;
-    if (penetrating && e.inside && e.depth >= 0.0) {
-      const double error = std::abs(ours[v].depth - e.depth);
+    const double expected = nearest_surface ? e.penetration : e.depth;
+    if (penetrating && e.inside && expected >= 0.0) {
+      const double error = std::abs(ours[v].depth - expected);
       m.max_depth_error = std::max(m.max_depth_error, error);
-      m.max_relative_depth_error = std::max(m.max_relative_depth_error, error / std::max(e.depth, epsilon));
+      m.max_relative_depth_error = std::max(m.max_relative_depth_error, error / std::max(expected, epsilon));
       depth_error_sum += error;
       ++m.depth_checked;
     }
@@ -53,6 +58,37 @@ void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>
   }
   m.inside_any += inside;
   if (target_closed && inside == exact.size()) m.contained = true;
+}
+
+// Every contact of a pair against the true penetration at its point: the
+// exact distance to the target's nearest surface (0 outside) and the way
+// there. Ratios and angles only where the truth is deeper than epsilon.
+void judge_truth(const StepResult& step, const PairResult& pr, const oracle::ExactShape& exact_a,
+                 const oracle::ExactShape& exact_b, const PosePair& poses, const Config& config, double epsilon,
+                 double allowance, PairMetrics& m, std::vector<double>& ratios, std::vector<double>& angles) {
+  for (const Contact& c : step.contacts_of(pr)) {
+    const bool into_b = c.source == Side::a;
+    const oracle::ExactShape& target = into_b ? exact_b : exact_a;
+    if (!target.closed()) continue;
+    const Pose& pose = into_b ? poses.b : poses.a;
+    const Eigen::Vector3d p = pose.inverse().apply(c.origin);
+    const double truth = target.inside(p) ? target.distance(p) : 0.0;
+    const double solver = config.projected ? c.projected_depth : c.depth;
+    ++m.truth_checked;
+    m.over_reports += solver > 1.25 * truth + allowance;
+    if (!(truth > epsilon)) continue;
+    const double ratio = solver / truth;
+    m.max_truth_ratio = std::max(m.max_truth_ratio, ratio);
+    ratios.push_back(ratio);
+    // The way to the nearest surface point; where several are as near (the
+    // middle of a slab), the one the contact names if it is one of them.
+    Eigen::Vector3d way = pose.orientation * (target.closest_point(p) - p);
+    const Eigen::Vector3d named = pose.inverse().apply(c.origin + c.direction * c.depth);
+    if (c.depth <= truth + epsilon && target.distance(named) <= epsilon) way = c.direction;
+    if (c.push.norm() > 0.0 && way.norm() > 0.0)
+      angles.push_back(std::acos(std::clamp(c.push.normalized().dot(way.normalized()), -1.0, 1.0)) * 180.0 /
+                       std::numbers::pi);
+  }
 }
 
 double percentile(std::vector<double> v, double q) {
@@ -159,7 +195,9 @@ RunResult run_family(const Family& family, const RunOptions& options) {
 
   double depth_error_sum = 0.0, ccd_difference_sum = 0.0, ccd_ratio_sum = 0.0;
   std::vector<OurRay> ours_a(family.a->sources().origins.size()), ours_b(family.b->sources().origins.size());
-  std::vector<double> missed_rates;
+  std::vector<double> missed_rates, truth_ratios, push_angles;
+  // Over-reports: deeper than 1.25x the truth plus 1e-3 of the smaller body's radius.
+  const double allowance = 1e-3 * std::min(family.a->radius(), family.b->radius());
   for (size_t i = 0; i < options.pairs; ++i) {
     PairMetrics m;
     m.index = i;
@@ -181,8 +219,9 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     const auto rays_ab = exact_b.rays_from(*family.a, m.poses.a, m.poses.b, epsilon);
     const auto rays_ba = exact_a.rays_from(*family.b, m.poses.b, m.poses.a, epsilon);
     s.time_exact += seconds_since(t);
-    judge(rays_ab, ours_a, exact_b.closed(), epsilon, m, depth_error_sum);
-    judge(rays_ba, ours_b, exact_a.closed(), epsilon, m, depth_error_sum);
+    judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
+    judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
+    judge_truth(step, pr, exact_a, exact_b, m.poses, config, epsilon, allowance, m, truth_ratios, push_angles);
     t = Clock::now();
     // Edge crossings, and a sphere's cap in a sphere or a box, in closed form.
     for (auto depths : {exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),
@@ -233,6 +272,8 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     s.far_outside += m.far_outside;
     s.false_rays += m.false_rays;
     s.depth_checked += m.depth_checked;
+    s.truth_checked += m.truth_checked;
+    s.over_reports += m.over_reports;
     s.max_depth_error = std::max(s.max_depth_error, m.max_depth_error);
     s.max_relative_depth_error = std::max(s.max_relative_depth_error, m.max_relative_depth_error);
     if (m.deep) missed_rates.push_back(m.missed_rate());
@@ -270,6 +311,11 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   s.missed_p90 = percentile(missed_rates, 0.9);
   s.missed_p99 = percentile(missed_rates, 0.99);
   s.missed_max = percentile(missed_rates, 1.0);
+  s.truth_ratio_p50 = percentile(truth_ratios, 0.5);
+  s.truth_ratio_p99 = percentile(truth_ratios, 0.99);
+  s.truth_ratio_max = percentile(truth_ratios, 1.0);
+  s.push_angle_p50 = percentile(push_angles, 0.5);
+  s.push_angle_p95 = percentile(push_angles, 0.95);
   if (s.ccd_pairs) {
     s.ccd_mean_abs_difference = ccd_difference_sum / double(s.ccd_pairs);
     s.ccd_mean_ratio = ccd_ratio_sum / double(s.ccd_pairs);
@@ -298,6 +344,10 @@ nlohmann::json to_json(const Summary& s) {
           {"false_rays", s.false_rays},
           {"depth_checked", s.depth_checked},
           {"depth_error", {{"max", s.max_depth_error}, {"mean", s.mean_depth_error}, {"max_relative", s.max_relative_depth_error}}},
+          {"truth", {{"contacts", s.truth_checked},
+                     {"over_reports", s.over_reports},
+                     {"depth_ratio", {{"p50", s.truth_ratio_p50}, {"p99", s.truth_ratio_p99}, {"max", s.truth_ratio_max}}},
+                     {"push_angle_degrees", {{"p50", s.push_angle_p50}, {"p95", s.push_angle_p95}}}}},
           {"oracles", s.with_oracles},
           {"fcl", {{"checked", s.fcl_checked}, {"agreement", s.fcl_agreement()}, {"contained", s.contained},
                    {"blind_contained", s.fcl_blind_contained}, {"missed_pairs", s.fcl_missed_pairs},
@@ -319,7 +369,8 @@ std::string describe(const Family& family, const PairMetrics& m, const RunOption
   std::ostringstream s;
   s << "family " << family.name << ", seed " << o.seed << ", pair " << m.index << " (" << to_string(o.mode)
     << "): deep " << m.deep << ", missed " << m.missed << ", false rays " << m.false_rays << ", max depth error "
-    << m.max_depth_error << "\n  pose A: \"" << pose_text(m.poses.a) << "\"\n  pose B: \"" << pose_text(m.poses.b)
+    << m.max_depth_error << ", over-reported contacts " << m.over_reports << " of " << m.truth_checked
+    << ", deepest over the truth " << m.max_truth_ratio << "x" << "\n  pose A: \"" << pose_text(m.poses.a) << "\"\n  pose B: \"" << pose_text(m.poses.b)
     << "\"\n  replay: rtcd query family:" << family.name << ":a family:" << family.name << ":b --backend "
     << o.backend << " --mode full --pose-a \"" << pose_text(m.poses.a) << "\" --pose-b \"" << pose_text(m.poses.b)
     << "\"\n  or:     rtcd validate --family " << family.name << " --backend " << o.backend << " --mode "

@@ -37,7 +37,8 @@ std::shared_ptr<const Shape> mesh(Mesh m) { return std::make_shared<Shape>(std::
 }  // namespace
 
 const std::vector<std::string>& family_names() {
-  static const std::vector<std::string> names = {"convex", "concave", "torus", "plates", "highres", "primitives", "bars", "rings"};
+  static const std::vector<std::string> names = {"convex", "concave", "torus", "plates", "highres", "primitives", "bars", "rings",
+                                                   "knots",  "gears",   "coarse", "boxes", "cacti"};
   return names;
 }
 
@@ -92,6 +93,40 @@ Family make_family(const std::string& name) {
     f.b = mesh(gen::box({0.04, 0.04, 0.6}));
     f.reach = 0.6;
     f.thinnest = 0.08;
+  } else if (name == "knots") {
+    // A thin tube's inward rays cross the tube and leave the blob far beyond:
+    // the family where the ray's depth and the true penetration part.
+    f.description = "trefoil-knot tube (tube r 0.06, 6400 triangles) vs 4050-triangle concave blob (r 1)";
+    f.a = mesh(gen::torus_knot(2, 3, 0.45, 0.06, 200, 16));
+    f.b = mesh(gen::concave_blob(4050, 16, 1.0));
+    f.reach = 2.6;
+    f.thinnest = 0.12;
+  } else if (name == "gears") {
+    f.description = "12-tooth gear (r 0.6, 0.2 thick) vs 16-tooth gear (r 1, 0.3 thick)";
+    f.a = mesh(gen::gear(12, 0.45, 0.6, 0.1));
+    f.b = mesh(gen::gear(16, 0.8, 1.0, 0.15));
+    f.reach = 1.7;
+    f.thinnest = 0.08;
+  } else if (name == "coarse") {
+    f.description = "tetrahedron (r 0.7, 4 triangles) vs octahedron (r 1, 8 triangles)";
+    f.a = mesh(gen::tetrahedron(0.7));
+    f.b = mesh(gen::octahedron(1.0));
+    f.convex = true;
+    f.reach = 1.7;
+    f.thinnest = 0.23;
+  } else if (name == "boxes") {
+    f.description = "box mesh (half 0.3, 12 triangles) vs slab mesh (1.2 x 1.2 x 0.3, 12 triangles)";
+    f.a = mesh(gen::box({0.3, 0.3, 0.3}));
+    f.b = mesh(gen::box({0.6, 0.6, 0.15}));
+    f.convex = true;
+    f.reach = 1.2;
+    f.thinnest = 0.3;
+  } else if (name == "cacti") {
+    f.description = "voxel cactus (a trunk with three arms, 1.2 tall) vs 902-triangle concave blob (r 1)";
+    f.a = mesh(gen::cactus(1.2));
+    f.b = mesh(gen::concave_blob(902, 17, 1.0));
+    f.reach = 1.9;
+    f.thinnest = 0.17;
   } else {
     std::string list;
     for (const auto& n : family_names()) list += (list.empty() ? "" : ", ") + n;

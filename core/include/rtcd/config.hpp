@@ -74,6 +74,15 @@ struct Config {
   // modes the edges near the target are tested again every step.
   bool edge_contacts = true;
 
+  // Measure each contact against the target's nearest surface: the ray
+  // proves a vertex is inside, and its depth, direction and face are those
+  // of the nearest point of the target's surface (the true penetration).
+  // Off: the thesis' ray contact, as deep as the ray runs to where it leaves
+  // the target (on a thin tube's side, across the tube and out of the far
+  // side of what it presses into). Default on. Cost: one nearest-triangle
+  // query per vertex contact, within its ray's exit distance.
+  bool nearest_surface = true;
+
   // Push along the impacted triangle's normal by the projected depth
   // (section 2.2) rather than along the ray by its depth: what Contact::push
   // holds. Default on. Cost: none here; it changes what the solver receives.

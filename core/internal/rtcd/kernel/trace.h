@@ -24,6 +24,23 @@
 #include "volumes.h"
 #include "walk.h"
 
+/* A penetrating ray's way out (Config::nearest_surface): the target's
+ * triangle nearest the vertex, searched no farther than the face the ray
+ * leaves through (most often the nearest itself). The ray proves the
+ * vertex is inside; how deep and which way out is the nearest surface's (a
+ * thin tube's inward ray crosses the tube and leaves a blob far beyond
+ * it). The host measures depth and direction to that triangle in double;
+ * none found (rounding): the exit face. */
+RTCD_INLINE void rtcd_nearest_surface(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
+                                      rtcd_outcome* o) {
+  float exit;
+  if (!p->nearest_surface || o->kind != RTCD_RAY_PENETRATING) return;
+  exit = RTCD_SQRT(rtcd_tracer_distance2(tracer, o->triangle, c->origin));
+  o->nearest_query = 1;
+  o->nearest = rtcd_tracer_nearest(tracer, c->origin, exit * 1.0001f);
+  if (o->nearest < 0) o->nearest = o->triangle;
+}
+
 /* Full tracing of one mesh ray: the inward ray; if it does not leave the
  * target, the predictive ray; if neither meets it and the vertex is within
  * reach of the target's box, it is watched. What serves only later walks
@@ -52,6 +69,7 @@ RTCD_INLINE void rtcd_full_trace(const rtcd_tracer* tracer, const rtcd_trace_par
       rtcd_hit back = rtcd_tracer_first_hit(tracer, &outward, 3.0e38f);
       if (back.triangle >= 0 && !rtcd_tracer_leaves(tracer, back.triangle, c->direction)) o->entry = back.triangle;
     }
+    rtcd_nearest_surface(tracer, p, c, o);
     return;
   }
   if (!p->predictive) return;
@@ -143,6 +161,7 @@ RTCD_INLINE void rtcd_walk_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   o->triangle = located ? exit_walk.triangle : start;
   o->t = exit_walk.t;
   if (kind == RTCD_RAY_PENETRATING) o->entry = entry_walk.triangle;
+  rtcd_nearest_surface(tracer, p, c, o);
 }
 
 /* A ray against a volume: the line test is exact, in both modes; a

@@ -50,6 +50,8 @@ typedef struct {
   rtcd_uchar edge;          /* RTCD_ITEM_EDGE: vertex is the edge's item, t the contact's place along it;
                                RTCD_ITEM_SPHERE: a sphere's deepest point (rtcd_sphere_trace); 0: a ray origin */
   rtcd_uchar edge_rays;     /* edge items: rays the crossing test cast */
+  rtcd_int nearest;         /* penetrating rays against a mesh (rtcd_trace_params::nearest_surface): the
+                               target's triangle nearest the origin, the contact's way out; -1 none */
 } rtcd_outcome;
 
 /* One job's parameters, the same for all of its rays. */
@@ -70,6 +72,7 @@ typedef struct {
   rtcd_int edges;       /* those items are candidates (Config::edge_contacts) */
   float source_radius;  /* a sphere source: its radius; 0 otherwise */
   float moved;          /* iterative jobs: the pair's motion since its full step (equation 2.1), rounded up */
+  rtcd_int nearest_surface; /* contacts take the target's nearest triangle as their way out (Config::nearest_surface) */
 } rtcd_trace_params;
 
 RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
@@ -86,6 +89,7 @@ RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
   o->fold_cast = 0;
   o->edge = RTCD_ITEM_ORIGIN;
   o->edge_rays = 0;
+  o->nearest = -1;
 }
 
 RTCD_INLINE int rtcd_inside_box(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3 hi) {

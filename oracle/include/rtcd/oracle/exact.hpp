@@ -24,6 +24,7 @@ struct ExactRay {
   bool near_surface = false;  // closer to the target's surface than the margin
   double depth = -1.0;        // inside: first hit of the inward ray (t >= 0) on the target; -1 otherwise
   int32_t triangle = -1;      // the triangle (mesh) or face (box) hit first; -1 when none
+  double penetration = -1.0;  // inside: distance to the target's nearest surface (the true depth); -1 otherwise
   bool deep() const { return inside && !near_surface; }
   bool far_outside() const { return !inside && !near_surface; }
 };
@@ -48,6 +49,9 @@ class ExactShape {
   // majority deciding (a crossing exactly through an edge spoils at most one).
   bool inside(const Eigen::Vector3d& p) const;
   double distance(const Eigen::Vector3d& p) const;
+  // The point of the surface nearest to p: inside, the true penetration's
+  // way out (its distance is distance(p)).
+  Eigen::Vector3d closest_point(const Eigen::Vector3d& p) const;
   // distance(p) < radius, found without searching the whole tree.
   bool within(const Eigen::Vector3d& p, double radius) const;
   // Nearest intersection of origin + t * direction, t >= 0, from either side.

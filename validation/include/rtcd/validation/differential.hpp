@@ -65,6 +65,10 @@ struct PairMetrics {
   bool fcl = false, has_gimpact = false, gimpact = false;
   bool has_ccd = false, ccd = false;
   double ccd_depth = 0.0, our_projected_depth = 0.0;
+  // Contacts judged against the true penetration, those deeper than it
+  // allows (Summary::over_reports), and the largest solver depth over it.
+  size_t truth_checked = 0, over_reports = 0;
+  double max_truth_ratio = 0.0;
   double missed_rate() const { return deep ? double(missed) / double(deep) : 0.0; }
 };
 
@@ -97,6 +101,15 @@ struct Summary {
   // rays, walks) and the edges' rays, and edges tested.
   size_t vertex_rays = 0, edge_rays = 0, edges_tested = 0;
   size_t gimpact_runs = 0, gimpact_checked = 0, gimpact_agree = 0;
+  // Every contact against the true penetration: the exact distance from
+  // its point to the target's nearest surface (closed targets). The depth
+  // the solver receives (projected_depth when Config::projected, else
+  // depth) over the truth, for contacts deeper than epsilon; contacts
+  // deeper than 1.25x the truth + 1e-3 of the smaller body's radius; the
+  // angle between the push and the way to the nearest surface point.
+  size_t truth_checked = 0, over_reports = 0;
+  double truth_ratio_p50 = 0.0, truth_ratio_p99 = 0.0, truth_ratio_max = 0.0;
+  double push_angle_p50 = 0.0, push_angle_p95 = 0.0;  // degrees
   size_t ccd_pairs = 0;
   double ccd_mean_abs_difference = 0.0, ccd_mean_ratio = 0.0;  // our largest projected depth vs libccd's
   // Seconds per pair (FCL: boolean collide, and collide with every contact).

@@ -35,7 +35,10 @@ struct Family {
   double step_motion() const;
 };
 
-// convex, concave, torus, plates, highres, primitives, bars (thin bars crossing), rings (a peg through a ring).
+// convex, concave, torus, plates, highres, primitives, bars (thin bars
+// crossing), rings (a peg through a ring); the shapes real meshes have:
+// knots (a thin tube), gears (teeth), coarse (tetrahedron, octahedron),
+// boxes (12 triangles each), cacti (a branching body).
 const std::vector<std::string>& family_names();
 // Throws UsageError listing the names when `name` is not one of them.
 Family make_family(const std::string& name);
