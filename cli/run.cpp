@@ -49,7 +49,7 @@ double peak_rss_mib() {
 constexpr const char* kCsvHeader =
     "step,time,bodies,seconds_broad,seconds_narrow,seconds_solver,seconds_effects,seconds_total,pairs,pairs_full,"
     "pairs_iterative,rays_full,rays_predictive,rays_iterative,contacts,predictive,solver_points,speculative_points,"
-    "kinetic_energy,interpenetration,projected_interpenetration,deepest";
+    "kinetic_energy,interpenetration,projected_interpenetration,deepest,true_penetration,deepest_true";
 
 void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
   out << r.step << ',' << r.time << ',' << r.bodies << ',' << r.seconds_broad << ',' << r.seconds_narrow << ','
@@ -57,8 +57,10 @@ void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
       << ',' << r.pairs_iterative << ',' << r.rays.rays_full << ',' << r.rays.rays_predictive << ','
       << r.rays.rays_iterative << ',' << r.contacts << ',' << r.predictive << ',' << r.solver_points << ','
       << r.speculative_points << ',' << r.kinetic_energy << ',';
-  if (r.interpenetration >= 0) out << r.interpenetration << ',' << r.projected << ',' << r.deepest;
-  else out << ",,";
+  if (r.interpenetration >= 0)
+    out << r.interpenetration << ',' << r.projected << ',' << r.deepest << ',' << r.true_penetration << ','
+        << r.deepest_true;
+  else out << ",,,,";
   out << '\n';
 }
 
@@ -207,6 +209,8 @@ int run_scene(const RunOptions& o, fs::path* folder) {
         {"summed_depth", last.interpenetration},
         {"summed_projected_depth", last.projected},
         {"deepest", last.deepest},
+        {"summed_true_penetration", last.true_penetration},
+        {"deepest_true", last.deepest_true},
         {"pairs", last.interpenetration_pairs}};
   if (!failure.empty()) summary["error"] = failure;
 
@@ -236,8 +240,10 @@ int run_scene(const RunOptions& o, fs::path* folder) {
               done ? totals.pairs / done : 0.0, done ? totals.rays / done : 0.0, done ? totals.contacts / done : 0.0,
               last.kinetic_energy);
   if (last.interpenetration >= 0)
-    std::printf("  interpenetration at the end: summed depth %.4g, summed projected depth %.4g, deepest %.4g over %zu pairs\n",
-                last.interpenetration, last.projected, last.deepest, last.interpenetration_pairs);
+    std::printf("  interpenetration at the end: summed depth %.4g, summed projected depth %.4g, deepest %.4g over %zu "
+                "pairs; true penetration summed %.4g, deepest %.4g\n",
+                last.interpenetration, last.projected, last.deepest, last.interpenetration_pairs,
+                last.true_penetration, last.deepest_true);
   std::printf("  output: %s\n", dir.string().c_str());
   if (!failure.empty()) {
     std::cerr << "rtcd: " << failure << " (outputs so far kept in " << dir.string() << ")\n";

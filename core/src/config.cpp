@@ -95,7 +95,8 @@ const Knob kKnobs[] = {
      "one nearest-triangle query per vertex contact, within its ray's exit distance", false,
      RTCD_FLAG_KNOB(nearest_surface)},
     {"projected", KnobType::flag, 0, 0, "on",
-     "push along the impacted triangle's normal by the projected depth (section 2.2), not along the ray",
+     "ray contacts (nearest_surface off) push along the impacted triangle's normal by the projected depth (section "
+     "2.2), not along the ray",
      "none here; it changes what the solver receives", true, RTCD_FLAG_KNOB(projected)},
     {"mode", KnobType::mode, 0, 0, "auto",
      "full: trace every step; iterative: walk after a pair's first full step; auto: walk while equation 2.1 allows",

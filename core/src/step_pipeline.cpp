@@ -544,19 +544,21 @@ void PipelineNarrowPhase::fill_edge(const RayJob& job, const RayOutcome& o, Body
 
 // A contact's way out to the nearest point of the target's face `face` from
 // p (the target's frame), in double: its face, depth, direction, normal and
-// push. The normal is the surface's at that point: the way out itself (the
-// face's normal where the point lies inside the face; on a valley's edge or
-// corner, where faces meet, the way out is the normal there). On the
-// surface already (touching): out along the face's normal.
+// push. The push runs along the way out by the depth: the surface's normal
+// at that point (the face's normal where the point lies inside the face, so
+// projecting changes nothing; on a valley's edge or corner, where faces
+// meet, the way out itself). On the surface already (touching): out along
+// the face's normal.
 void PipelineNarrowPhase::measure_out(const ShapeEntry& target, int32_t face, const Eigen::Vector3d& p,
                                       const Eigen::Matrix3d& target_rotation, Contact& c) const {
   const Eigen::Vector3d out = target.nearest_on_face(face, p) - p;
+  const Eigen::Vector3d normal = target.exit_normal(face, p + out);
   c.triangle = face;
   c.depth = out.norm();
-  c.direction = target_rotation * (c.depth > 0.0 ? Eigen::Vector3d(out / c.depth) : target.exit_normal(face, p));
-  c.normal = c.direction;
+  c.direction = target_rotation * (c.depth > 0.0 ? Eigen::Vector3d(out / c.depth) : normal);
+  c.normal = target_rotation * normal;
   c.projected_depth = c.depth * std::abs(c.direction.dot(c.normal));
-  c.push = config_.projected ? Eigen::Vector3d(c.normal * c.projected_depth) : Eigen::Vector3d(c.direction * c.depth);
+  c.push = c.direction * c.depth;
 }
 
 RayTally& RayTally::operator+=(const RayTally& o) {

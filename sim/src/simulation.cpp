@@ -183,7 +183,10 @@ struct Simulation::Impl {
   Scene scene;
   std::string backend_name;
   std::unique_ptr<NarrowPhase> narrow;  // the simulation's (contacts only)
-  std::unique_ptr<NarrowPhase> probe;   // the interpenetration pass's: stateless, full tracing
+  // The interpenetration pass's, stateless, full tracing: the thesis' ray
+  // contacts (probe), and the same contacts measured to the nearest surface
+  // (truth: the true penetration). Shapes and bodies take the same ids in both.
+  std::unique_ptr<NarrowPhase> probe, truth;
   std::unique_ptr<btDefaultCollisionConfiguration> configuration;
   std::unique_ptr<btCollisionDispatcher> dispatcher;
   BatchDispatcher* batch = nullptr;        // dispatcher, when rtcd answers the contacts
@@ -228,7 +231,10 @@ Simulation::Impl::Impl(const Scene& s, const std::string& backend_override, int 
     Config c = scene.narrow;
     c.mode = Mode::full;
     c.predictive = false;
+    c.nearest_surface = false;
     probe = make_narrow_phase(backend, c);
+    c.nearest_surface = true;
+    truth = make_narrow_phase(backend, c);
   }
   if (use_gimpact && contacts) backend_name = kGimpact;
   else if (narrow) backend_name = narrow->name();
@@ -314,6 +320,7 @@ void Simulation::Impl::make_kinds() {
     if (gimpact) make_gimpact_shape(k);
     if (narrow) k.id = narrow->add_shape(k.shape);
     if (probe) k.probe_id = probe->add_shape(k.shape);
+    if (truth && truth->add_shape(k.shape) != k.probe_id) throw std::logic_error("probe shape ids out of step");
     kinds.push_back(std::move(k));
   }
 }
@@ -322,6 +329,7 @@ BodyId Simulation::Impl::register_shape_body(ShapeId id, ShapeId probe_id, const
   BodyId body = BodyId(bodies.size());
   if (narrow && narrow->add_body(id, pose) != body) throw std::logic_error("narrow-phase body ids out of step");
   if (probe && probe->add_body(probe_id, pose) != body) throw std::logic_error("probe body ids out of step");
+  if (truth && truth->add_body(probe_id, pose) != body) throw std::logic_error("probe body ids out of step");
   return body;
 }
 
@@ -333,6 +341,7 @@ void Simulation::Impl::add_ground() {
   pose.position = g.normal * g.height;
   const ShapeId id = narrow ? narrow->add_shape(ground_shape) : 0;
   const ShapeId probe_id = probe ? probe->add_shape(ground_shape) : 0;
+  if (truth && truth->add_shape(ground_shape) != probe_id) throw std::logic_error("probe shape ids out of step");
   ground_plane = std::make_unique<btStaticPlaneShape>(btVector3(0, 0, 1), btScalar(0));
   btRigidBody::btRigidBodyConstructionInfo info(0, nullptr, ground_plane.get());
   info.m_startWorldTransform = bt(pose);
@@ -424,7 +433,9 @@ void Simulation::Impl::measure() {
   }
   for (const Body& b : bodies) {
     const Kind* k = b.spec == SIZE_MAX ? nullptr : &kinds[b.spec];
-    probe->set_pose(b.id, pose_of(b.rigid->getWorldTransform()) * (k ? k->principal.inverse() : Pose{}));
+    const Pose pose = pose_of(b.rigid->getWorldTransform()) * (k ? k->principal.inverse() : Pose{});
+    probe->set_pose(b.id, pose);
+    truth->set_pose(b.id, pose);
   }
   const StepResult r = probe->detect(pairs);
   double sum = 0, projected = 0, deepest = 0;
@@ -436,6 +447,13 @@ void Simulation::Impl::measure() {
   record.interpenetration = sum;
   record.projected = projected;
   record.deepest = deepest;
+  sum = deepest = 0;
+  for (const Contact& c : truth->detect(pairs).contacts) {
+    sum += c.depth;
+    deepest = std::max(deepest, c.depth);
+  }
+  record.true_penetration = sum;
+  record.deepest_true = deepest;
   record.interpenetration_pairs = pairs.size();
   ++counters.interpenetration_passes;
 }

@@ -43,20 +43,25 @@ TEST(Cli, BackendsJson) {
   EXPECT_TRUE(basic);
 }
 
+// A's four +x corners are 0.1 inside B's faces x, y and z alike: the ray
+// contact runs 0.1 * sqrt(3) along the corner's diagonal to x = 0.4 (the
+// thesis' contact, --no-nearest-surface); the nearest surface is 0.1 away.
 TEST(Cli, QueryHandComputedCubesJson) {
-  for (const std::string& pair : {data + "box.obj box:0.6,0.6,0.6", std::string("box:0.5,0.5,0.5 box:0.6,0.6,0.6")}) {
-    const Outcome r = run("query " + pair + " --pose-b \"1 0 0 1 0 0 0\" --json");
-    ASSERT_EQ(r.code, 0) << r.out;
-    const auto j = nlohmann::json::parse(r.out);
-    EXPECT_TRUE(j["colliding"].get<bool>());
-    ASSERT_EQ(j["contacts"].size(), 4u);
-    for (const auto& c : j["contacts"]) {
-      EXPECT_EQ(c["source"], "a");
-      EXPECT_NEAR(c["depth"].get<double>(), 0.1 * std::sqrt(3.0), 1e-6);
-      EXPECT_NEAR(c["projected_depth"].get<double>(), 0.1, 1e-6);
-      EXPECT_NEAR(c["normal"][0].get<double>(), -1.0, 1e-6);
+  for (const std::string& pair : {data + "box.obj box:0.6,0.6,0.6", std::string("box:0.5,0.5,0.5 box:0.6,0.6,0.6")})
+    for (const bool rays : {true, false}) {
+      const Outcome r =
+          run("query " + pair + " --pose-b \"1 0 0 1 0 0 0\" --json" + (rays ? " --no-nearest-surface" : ""));
+      ASSERT_EQ(r.code, 0) << r.out;
+      const auto j = nlohmann::json::parse(r.out);
+      EXPECT_TRUE(j["colliding"].get<bool>());
+      ASSERT_EQ(j["contacts"].size(), 4u);
+      for (const auto& c : j["contacts"]) {
+        EXPECT_EQ(c["source"], "a");
+        EXPECT_NEAR(c["depth"].get<double>(), rays ? 0.1 * std::sqrt(3.0) : 0.1, 1e-6);
+        EXPECT_NEAR(c["projected_depth"].get<double>(), 0.1, 1e-6);
+        if (rays) EXPECT_NEAR(c["normal"][0].get<double>(), -1.0, 1e-6);
+      }
     }
-  }
 }
 
 // docs/knobs.md holds `rtcd knobs` as it prints: the table is the one

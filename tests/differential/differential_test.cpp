@@ -43,7 +43,8 @@ std::vector<Case> all_cases() {
       // every triangle, takes minutes (the 20,000-triangle family five),
       // with the same per-ray code the small families judge here and that
       // opencl-basic runs bit for bit on every family (tests/opencl).
-      if (backend == "basic" && (family == "highres" || family == "concave" || family == "torus")) continue;
+      if (backend == "basic" && (family == "highres" || family == "concave" || family == "torus" || family == "knots"))
+        continue;
       for (RunMode mode : {RunMode::full, RunMode::iterative}) cases.push_back({family, backend, mode});
     }
   }
@@ -75,7 +76,7 @@ TEST_P(Differential, BoundsHold) {
   // The reference libraries judge the poses, not our backend: once per
   // family. GIMPACT takes long on the 20k-triangle family: 100 pairs there.
   o.with_oracles = c.mode == RunMode::full && c.backend == test::usable_backends().front();
-  if (c.family == "highres") o.gimpact_pairs = 100;
+  if (c.family == "highres" || c.family == "knots") o.gimpact_pairs = 100;
   const RunResult r = run_family(family, o);
   const Summary& s = r.summary;
   std::cout << to_json(s).dump() << '\n';

@@ -64,7 +64,7 @@ void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>
 // exact distance to the target's nearest surface (0 outside) and the way
 // there. Ratios and angles only where the truth is deeper than epsilon.
 void judge_truth(const StepResult& step, const PairResult& pr, const oracle::ExactShape& exact_a,
-                 const oracle::ExactShape& exact_b, const PosePair& poses, const Config& config, double epsilon,
+                 const oracle::ExactShape& exact_b, const PosePair& poses, double epsilon,
                  double allowance, PairMetrics& m, std::vector<double>& ratios, std::vector<double>& angles) {
   for (const Contact& c : step.contacts_of(pr)) {
     const bool into_b = c.source == Side::a;
@@ -73,7 +73,7 @@ void judge_truth(const StepResult& step, const PairResult& pr, const oracle::Exa
     const Pose& pose = into_b ? poses.b : poses.a;
     const Eigen::Vector3d p = pose.inverse().apply(c.origin);
     const double truth = target.inside(p) ? target.distance(p) : 0.0;
-    const double solver = config.projected ? c.projected_depth : c.depth;
+    const double solver = c.push.norm();  // what a host's solver is asked to undo
     ++m.truth_checked;
     m.over_reports += solver > 1.25 * truth + allowance;
     if (!(truth > epsilon)) continue;
@@ -221,7 +221,7 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     s.time_exact += seconds_since(t);
     judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
     judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
-    judge_truth(step, pr, exact_a, exact_b, m.poses, config, epsilon, allowance, m, truth_ratios, push_angles);
+    judge_truth(step, pr, exact_a, exact_b, m.poses, epsilon, allowance, m, truth_ratios, push_angles);
     t = Clock::now();
     // Edge crossings, and a sphere's cap in a sphere or a box, in closed form.
     for (auto depths : {exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),

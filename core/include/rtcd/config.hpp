@@ -83,9 +83,11 @@ struct Config {
   // query per vertex contact, within its ray's exit distance.
   bool nearest_surface = true;
 
-  // Push along the impacted triangle's normal by the projected depth
-  // (section 2.2) rather than along the ray by its depth: what Contact::push
-  // holds. Default on. Cost: none here; it changes what the solver receives.
+  // Ray contacts (nearest_surface off) push along the impacted triangle's
+  // normal by the projected depth (section 2.2) rather than along the ray by
+  // its depth: what Contact::push holds. A contact measured to the nearest
+  // surface pushes along its way out, that surface's normal. Default on.
+  // Cost: none here; it changes what the solver receives.
   bool projected = true;
 
   // Full, iterative or automatic (default).

@@ -57,8 +57,11 @@ enum class ContactKind : uint8_t { vertex, edge, sphere };
 const char* to_string(ContactKind kind);
 
 // One point of the source inside the target; moving it by direction * depth
-// brings it to the target's surface. Vertex contacts: the vertex `origin`
-// along its inward normal `direction`, out through `triangle`. Edge
+// brings it to the target's surface. Vertex contacts: the vertex `origin`,
+// toward the nearest point of the target's surface on `triangle`
+// (Config::nearest_surface: depth is the true penetration), or with it off
+// (the thesis' ray contact) along its inward normal `direction`, out
+// through `triangle`. Edge
 // contacts: the point `origin` of the edge `edge` halfway between where
 // its line enters the target from either end, `direction` toward the
 // nearest point of the target's surface, on `triangle` (see
@@ -70,8 +73,11 @@ struct Contact : RayRecord {
   std::array<uint32_t, 2> edge{};
   double depth = 0.0;
   double projected_depth = 0.0;  // depth * |direction . normal| (section 2.2)
-  // What to move the source vertex by to separate: normal * projected_depth
-  // when Config::projected, direction * depth otherwise.
+  // What to move the source vertex by to separate. Measured to the nearest
+  // surface (Config::nearest_surface, and every edge and sphere contact):
+  // direction * depth, the way out (the surface's normal there). Ray
+  // contacts: normal * projected_depth when Config::projected, direction *
+  // depth otherwise.
   Eigen::Vector3d push = Eigen::Vector3d::Zero();
 };
 

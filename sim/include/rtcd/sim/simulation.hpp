@@ -51,6 +51,10 @@ struct StepRecord {
   double interpenetration = -1;  // summed depth of every penetrating ray (the thesis' figure)
   double projected = -1;         // summed projected depth: what the solver is asked to undo
   double deepest = -1;           // the largest single depth, projected
+  // The same pass's contacts measured to the target's nearest surface
+  // (Config::nearest_surface): the true penetration, summed and deepest.
+  double true_penetration = -1;
+  double deepest_true = -1;
   size_t interpenetration_pairs = 0;
 };
 

@@ -103,9 +103,8 @@ struct Summary {
   size_t gimpact_runs = 0, gimpact_checked = 0, gimpact_agree = 0;
   // Every contact against the true penetration: the exact distance from
   // its point to the target's nearest surface (closed targets). The depth
-  // the solver receives (projected_depth when Config::projected, else
-  // depth) over the truth, for contacts deeper than epsilon; contacts
-  // deeper than 1.25x the truth + 1e-3 of the smaller body's radius; the
+  // the solver receives (the push's length) over the truth, for contacts
+  // deeper than epsilon; contacts deeper than 1.25x the truth + 1e-3 of the smaller body's radius; the
   // angle between the push and the way to the nearest surface point.
   size_t truth_checked = 0, over_reports = 0;
   double truth_ratio_p50 = 0.0, truth_ratio_p99 = 0.0, truth_ratio_max = 0.0;
