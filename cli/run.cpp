@@ -49,7 +49,8 @@ double peak_rss_mib() {
 constexpr const char* kCsvHeader =
     "step,time,bodies,seconds_broad,seconds_narrow,seconds_solver,seconds_effects,seconds_total,pairs,pairs_full,"
     "pairs_iterative,rays_full,rays_predictive,rays_iterative,contacts,predictive,solver_points,speculative_points,"
-    "kinetic_energy,interpenetration,projected_interpenetration,deepest,true_penetration,deepest_true";
+    "kinetic_energy,interpenetration,projected_interpenetration,deepest,true_penetration,deepest_true,deep_pairs,"
+    "longest_deep_run";
 
 void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
   out << r.step << ',' << r.time << ',' << r.bodies << ',' << r.seconds_broad << ',' << r.seconds_narrow << ','
@@ -59,8 +60,8 @@ void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
       << r.speculative_points << ',' << r.kinetic_energy << ',';
   if (r.interpenetration >= 0)
     out << r.interpenetration << ',' << r.projected << ',' << r.deepest << ',' << r.true_penetration << ','
-        << r.deepest_true;
-  else out << ",,,,";
+        << r.deepest_true << ',' << r.deep_pairs << ',' << r.longest_deep_run;
+  else out << ",,,,,,";
   out << '\n';
 }
 
@@ -211,6 +212,8 @@ int run_scene(const RunOptions& o, fs::path* folder) {
         {"deepest", last.deepest},
         {"summed_true_penetration", last.true_penetration},
         {"deepest_true", last.deepest_true},
+        {"deep_pairs", last.deep_pairs},
+        {"longest_deep_run_steps", last.longest_deep_run},
         {"pairs", last.interpenetration_pairs}};
   if (!failure.empty()) summary["error"] = failure;
 

@@ -40,7 +40,11 @@ py::dict record_dict(const sim::StepRecord& r) {
   d["interpenetration"] = measured(r.interpenetration);
   d["projected_interpenetration"] = measured(r.projected);
   d["deepest"] = measured(r.deepest);
+  d["true_penetration"] = measured(r.true_penetration);
+  d["deepest_true"] = measured(r.deepest_true);
   d["interpenetration_pairs"] = r.interpenetration_pairs;
+  d["deep_pairs"] = r.deep_pairs;
+  d["longest_deep_run"] = r.longest_deep_run;
   return d;
 }
 
@@ -151,14 +155,16 @@ record; poses, velocities and contacts are the state after it.)")
                                return a;
                              })
       .def_property_readonly(
-          "contacts", [](const PySimulation& s) { return wrap_step(s.simulation->last_narrow_phase()); },
-          "The narrow phase's answer on the last step (a StepResult; body ids are the narrow phase's).")
+          "contacts", [](const PySimulation& s) { return wrap_step(s.simulation->contacts()); },
+          "The narrow phase's answer on the last step (a StepResult). Bodies are numbered as poses, labels, "
+          "velocities and masses number them: body k is poses[k]; the ground is Simulation.GROUND.")
       .def_property_readonly("pairs",
                              [](const PySimulation& s) {
-                               const auto pairs = s.simulation->last_pairs();
+                               const auto pairs = s.simulation->pairs();
                                return py::array_t<uint32_t>({py::ssize_t(pairs.size()), py::ssize_t(2)},
                                                             reinterpret_cast<const uint32_t*>(pairs.data()));
-                             })
+                             },
+                             "(k, 2): the pairs the last step handed the narrow phase, numbered as poses")
       .def_property_readonly("counters",
                              [](const PySimulation& s) {
                                const sim::StageCounters& c = s.simulation->counters();
@@ -171,6 +177,7 @@ record; poses, velocities and contacts are the state after it.)")
                                                py::arg("snapshots") = c.snapshots);
                              })
       .def_property_readonly("warnings", [](const PySimulation& s) { return s.simulation->warnings(); })
+      .def_readonly_static("GROUND", &sim::Simulation::kGround, "The ground's number in contacts and pairs")
       .def(
           "measure_interpenetration",
           [](PySimulation& s) {

@@ -221,6 +221,21 @@ Shape.half_space(): z <= 0 of its frame, a ground.)")
   gen.def(
       "u_shape", [](double scale, double half_depth) { return wrap(gen::u_shape(scale, half_depth)); },
       py::arg("scale") = 1.0, py::arg("half_depth") = 0.5);
+  gen.def("tetrahedron", [](double radius) { return wrap(gen::tetrahedron(radius)); }, py::arg("radius"));
+  gen.def("octahedron", [](double radius) { return wrap(gen::octahedron(radius)); }, py::arg("radius"));
+  gen.def(
+      "torus_knot",
+      [](int p, int q, double radius, double tube_radius, int segments, int sides) {
+        return wrap(gen::torus_knot(p, q, radius, tube_radius, segments, sides));
+      },
+      py::arg("p"), py::arg("q"), py::arg("radius"), py::arg("tube_radius"), py::arg("segments"), py::arg("sides"));
+  gen.def(
+      "gear",
+      [](int teeth, double root, double tip, double half_thickness) {
+        return wrap(gen::gear(teeth, root, tip, half_thickness));
+      },
+      py::arg("teeth"), py::arg("root_radius"), py::arg("tip_radius"), py::arg("half_thickness"));
+  gen.def("cactus", [](double height) { return wrap(gen::cactus(height)); }, py::arg("height"));
 }
 
 }  // namespace rtcd::python

@@ -51,7 +51,8 @@ inside, distance and first_hit answer in the shape's own frame;
 rays_from(source, source_pose, pose, margin) judges every ray origin of
 `source` against this shape: dict of arrays near, inside, near_surface,
 deep (inside beyond the margin), depth (the inward ray's first hit; -1
-outside) and triangle.)")
+outside), penetration (the distance to the nearest surface, the true
+depth; -1 outside) and triangle.)")
       .def(py::init([](py::handle shape) { return std::make_unique<ExactShape>(shape_of(shape, "shape")); }),
            py::arg("shape"))
       .def_property_readonly("closed", &ExactShape::closed)
@@ -67,6 +68,18 @@ outside) and triangle.)")
             return per_point<double>(points, "points", [&](const Eigen::Vector3d& p) { return e.distance(p); });
           },
           py::arg("points"))
+      .def(
+          "closest_point",
+          [](const ExactShape& e, py::handle points) {
+            const auto p = float_rows(points, "points", 3);
+            py::array_t<double> out({p.shape(0), py::ssize_t(3)});
+            for (py::ssize_t i = 0; i < p.shape(0); ++i) {
+              const Eigen::Vector3d q = e.closest_point({p.at(i, 0), p.at(i, 1), p.at(i, 2)});
+              for (int k = 0; k < 3; ++k) out.mutable_at(i, k) = q[k];
+            }
+            return out;
+          },
+          py::arg("points"), "(n, 3): each point's nearest point of the surface")
       .def(
           "first_hit",
           [](const ExactShape& e, py::handle origins, py::handle directions) {
@@ -98,7 +111,7 @@ outside) and triangle.)")
             }
             const py::ssize_t n = py::ssize_t(rays.size());
             py::array_t<bool> near(n), inside(n), near_surface(n), deep(n);
-            py::array_t<double> depth(n);
+            py::array_t<double> depth(n), penetration(n);
             py::array_t<int32_t> triangle(n);
             for (py::ssize_t i = 0; i < n; ++i) {
               const auto& r = rays[size_t(i)];
@@ -107,10 +120,12 @@ outside) and triangle.)")
               near_surface.mutable_at(i) = r.near_surface;
               deep.mutable_at(i) = r.deep();
               depth.mutable_at(i) = r.depth;
+              penetration.mutable_at(i) = r.penetration;
               triangle.mutable_at(i) = r.triangle;
             }
             return py::dict(py::arg("near") = near, py::arg("inside") = inside, py::arg("near_surface") = near_surface,
-                            py::arg("deep") = deep, py::arg("depth") = depth, py::arg("triangle") = triangle);
+                            py::arg("deep") = deep, py::arg("depth") = depth, py::arg("penetration") = penetration,
+                            py::arg("triangle") = triangle);
           },
           py::arg("source"), py::arg("source_pose"), py::arg("pose"), py::arg("margin"))
       .def(

@@ -468,8 +468,7 @@ std::vector<RenderLine> contact_lines(std::span<const Contact> contacts, bool fu
   lines.reserve(contacts.size());
   for (const Contact& c : contacts)
     lines.push_back({c.origin,
-                     full_rays ? Eigen::Vector3d(c.origin + c.depth * c.direction)
-                               : Eigen::Vector3d(c.origin + c.projected_depth * c.normal),
+                     full_rays ? Eigen::Vector3d(c.origin + c.depth * c.direction) : Eigen::Vector3d(c.origin + c.push),
                      Eigen::Vector3f(0.9f, 0.1f, 0.1f)});
   return lines;
 }

@@ -6,6 +6,7 @@
 #include <cstring>
 #include <limits>
 #include <random>
+#include <unordered_map>
 
 #include <btBulletDynamicsCommon.h>
 #include <BulletCollision/Gimpact/btGImpactCollisionAlgorithm.h>
@@ -187,6 +188,9 @@ struct Simulation::Impl {
   // contacts (probe), and the same contacts measured to the nearest surface
   // (truth: the true penetration). Shapes and bodies take the same ids in both.
   std::unique_ptr<NarrowPhase> probe, truth;
+  // Pairs the truth pass found deeper than 2% of the smaller body's size,
+  // and for how many passes in a row (pair_key -> passes).
+  std::unordered_map<uint64_t, uint32_t> deep_runs, deep_runs_next;
   std::unique_ptr<btDefaultCollisionConfiguration> configuration;
   std::unique_ptr<btCollisionDispatcher> dispatcher;
   BatchDispatcher* batch = nullptr;        // dispatcher, when rtcd answers the contacts
@@ -448,12 +452,31 @@ void Simulation::Impl::measure() {
   record.projected = projected;
   record.deepest = deepest;
   sum = deepest = 0;
-  for (const Contact& c : truth->detect(pairs).contacts) {
+  const StepResult& t = truth->detect(pairs);
+  for (const Contact& c : t.contacts) {
     sum += c.depth;
     deepest = std::max(deepest, c.depth);
   }
   record.true_penetration = sum;
   record.deepest_true = deepest;
+  // Pairs held deep: a pair's size is its smaller body's diameter (the ground has none).
+  const auto size = [&](BodyId id) {
+    const Body& b = bodies[id];
+    return b.spec == SIZE_MAX ? INFINITY : 2.0 * kinds[b.spec].shape->radius();
+  };
+  deep_runs_next.clear();
+  uint32_t longest = 0;
+  for (const PairResult& p : t.pairs) {
+    if (!(p.max_depth > 0.02 * std::min(size(p.pair.a), size(p.pair.b)))) continue;
+    const uint64_t key = pair_key(p.pair.a, p.pair.b);
+    const auto before = deep_runs.find(key);
+    const uint32_t run = (before == deep_runs.end() ? 0 : before->second) + 1;
+    deep_runs_next[key] = run;
+    longest = std::max(longest, run);
+  }
+  deep_runs.swap(deep_runs_next);
+  record.deep_pairs = deep_runs.size();
+  record.longest_deep_run = uint64_t(longest) * scene.interpenetration_every;
   record.interpenetration_pairs = pairs.size();
   ++counters.interpenetration_passes;
 }
@@ -589,6 +612,32 @@ void Simulation::shape_poses(std::vector<Pose>& out) const {
 const StepResult& Simulation::last_narrow_phase() const {
   static const StepResult none;
   return impl_->batch ? impl_->batch->last_step() : none;
+}
+
+namespace {
+// Each narrow-phase BodyId's place in bodies() (kGround for the ground).
+std::vector<uint32_t> body_numbers(const std::vector<uint32_t>& kinds) {
+  std::vector<uint32_t> out;
+  uint32_t next = 0;
+  for (uint32_t kind : kinds) out.push_back(kind == Simulation::kGroundKind ? Simulation::kGround : next++);
+  return out;
+}
+}  // namespace
+
+StepResult Simulation::contacts() const {
+  StepResult r = last_narrow_phase();
+  const std::vector<uint32_t> number = body_numbers(body_kinds());
+  for (Contact& c : r.contacts) c.source_body = number[c.source_body], c.target_body = number[c.target_body];
+  for (PredictiveRay& p : r.predictive) p.source_body = number[p.source_body], p.target_body = number[p.target_body];
+  for (PairResult& p : r.pairs) p.pair = {number[p.pair.a], number[p.pair.b]};
+  return r;
+}
+
+std::vector<BodyPair> Simulation::pairs() const {
+  const std::vector<uint32_t> number = body_numbers(body_kinds());
+  std::vector<BodyPair> out;
+  for (const BodyPair& p : last_pairs()) out.push_back({number[p.a], number[p.b]});
+  return out;
 }
 
 std::vector<BodyState> Simulation::bodies() const {

@@ -137,8 +137,9 @@ def test_rays_are_contacts_then_predictive():
 
 
 def three_pairs():
-    """Three cube pairs far apart, each sunk by a different depth."""
-    narrow = rtcd.NarrowPhase("embree", mode="full")
+    """Three cube pairs far apart, each sunk by a different depth, as the
+    thesis' ray contacts measure it (along each corner's diagonal)."""
+    narrow = rtcd.NarrowPhase("embree", mode="full", nearest_surface=False)
     sa, sb = narrow.add_shape(rtcd.gen.box([0.5, 0.5, 0.5])), narrow.add_shape(rtcd.gen.box([0.6, 0.6, 0.6]))
     rows = []
     for k, sink in enumerate([0.05, 0.1, 0.15]):

@@ -67,6 +67,29 @@ def test_simulation_steps(scenes_dir):
     assert isinstance(sim.state_hash(), int)
 
 
+def test_contacts_number_bodies_as_poses(scenes_dir):
+    """Simulation.contacts and pairs number bodies as poses and labels do:
+    a contact lies on its source body, within a blob's radius of
+    poses[source_body]; the ground is Simulation.GROUND."""
+    sim = rtcd.Simulation(scenes_dir / "avalanche_small.json", backend="embree")
+    sim.step(120)
+    c = sim.contacts.contacts
+    ground = rtcd.Simulation.GROUND
+    assert (c.target_body == ground).any(), "blobs rest on the ground"
+    between = (c.source_body != ground) & (c.target_body != ground)
+    assert between.any(), "and on each other"
+    count = len(sim.poses)
+    assert np.all((c.source_body < count) | (c.source_body == ground))
+    assert np.all((c.target_body < count) | (c.target_body == ground))
+    assert np.all((sim.pairs < count) | (sim.pairs == ground))
+    # blob_902 scaled by 0.25: every surface point within 0.3 of its centre.
+    src = c.source_body != ground
+    reach = np.linalg.norm(c.origin[src] - sim.poses[c.source_body[src], :3], axis=1)
+    assert reach.max() < 0.3
+    reach = np.linalg.norm(c.origin[between] - sim.poses[c.target_body[between], :3], axis=1)
+    assert reach.max() < 0.3, "the target holds the point"
+
+
 def test_a_ball_falls():
     """A scene as a dict: one ball under gravity, nothing else."""
     scene = {"effects": ["gravity"], "ground": False,

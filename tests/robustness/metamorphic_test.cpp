@@ -140,7 +140,10 @@ TEST_P(Metamorphic, RenumberingPermutesIdsOnly) {
     Depths expected;
     for (const auto& [key, depth] : depths(x.step(c.a, c.b)))
       expected[{key.first, key.first == int(Side::b) ? to_new[key.second] : key.second}] = depth;
-    compared += expect_same(expected, depths(y.step(c.a, c.b)), 1e-9, 1e-9);
+    // Depths to the nearest surface: its triangle is chosen in float (the
+    // tracers' rule), so where two lie as near within float rounding the
+    // lower id wins, and renumbering may pick the other, a rounding farther.
+    compared += expect_same(expected, depths(y.step(c.a, c.b)), 1e-9, 1e-6);
   }
   EXPECT_GT(compared, 100u) << "too few contacts: vacuous";
 }

@@ -321,12 +321,17 @@ TEST(Sim, StagesCountTheirWorkAndUnlistedOnesDoNone) {
 // edge keeps its centre of mass from moving sideways. Pushed along the
 // rays instead (a box's corner rays point inward, diagonally), the landing
 // kicks it sideways.
+// The thesis' ray contacts (nearest_surface off) push along the ray unless
+// projected; contacts measured to the nearest surface push straight out of
+// the ground either way.
 TEST(Sim, ProjectedContactsPushAlongTheNormalOnly) {
-  for (bool projected : {true, false}) {
+  for (const auto& [projected, nearest] : {std::pair{true, false}, std::pair{false, false}, std::pair{false, true}}) {
+    SCOPED_TRACE(std::string(projected ? "projected" : "not projected") + (nearest ? ", nearest surface" : ""));
     const std::string effects = projected ? R"(["gravity", "contacts", "predictive", "projected"])"
                                           : R"(["gravity", "contacts", "predictive"])";
     // 30° about x: the lowest edge is 0.25 (cos 30° + sin 30°) = 0.342 below the centre.
-    Simulation s(scene_from(R"({"time_step": 0.008333333333333333, "steps": 120, "effects": )" + effects + R"(,
+    Simulation s(scene_from(R"({"time_step": 0.008333333333333333, "steps": 120, "effects": )" + effects +
+                            R"(, "narrow_phase": {"nearest_surface": )" + (nearest ? "true" : "false") + R"(},
       "bodies": [{"box": [0.25, 0.25, 0.25], "mass": 1,
                   "pose": {"position": [0, 0, 0.4], "orientation": [0.96592582628906831, 0.25881904510252074, 0, 0]}}]})"));
     double sideways = 0;  // the largest horizontal speed seen
@@ -337,7 +342,7 @@ TEST(Sim, ProjectedContactsPushAlongTheNormalOnly) {
       sideways = std::max(sideways, std::hypot(v.x(), v.y()));
     }
     ASSERT_GT(contacts, 0u);
-    if (projected)
+    if (projected || nearest)
       EXPECT_LT(sideways, 1e-6);
     else
       EXPECT_GT(sideways, 1e-2);
@@ -346,8 +351,9 @@ TEST(Sim, ProjectedContactsPushAlongTheNormalOnly) {
 
 // The interpenetration pass measures what is there: a box held 0.05 deep in
 // the ground (no gravity, no contacts to push it out) has four corners sunk
-// 0.05, each reached by a diagonal ray 0.05 √3 long, on the pass's steps
-// (every 5th and the last) and on no other; unlisted, no step measures.
+// 0.05, each reached by a diagonal ray 0.05 √3 long (the true penetration
+// 0.05), on the pass's steps (every 5th and the last) and on no other;
+// unlisted, no step measures.
 TEST(Sim, InterpenetrationMeasuresTheDepthThere) {
   for (bool listed : {true, false}) {
     Simulation s(scene_from(std::string(R"({"steps": 12, "interpenetration": {"every": 5}, "effects": )") +
@@ -361,16 +367,18 @@ TEST(Sim, InterpenetrationMeasuresTheDepthThere) {
       EXPECT_NEAR(r.deepest, 0.05, 1e-5) << "step " << i;
       EXPECT_NEAR(r.interpenetration, 4 * 0.05 * std::sqrt(3.0), 1e-4) << "step " << i;
       EXPECT_NEAR(r.projected, 4 * 0.05, 1e-4) << "step " << i << ": each corner 0.05 along the ground's normal";
+      EXPECT_NEAR(r.deepest_true, 0.05, 1e-5) << "step " << i << ": the true penetration, straight down";
+      EXPECT_NEAR(r.true_penetration, 4 * 0.05, 1e-4) << "step " << i;
     }
     EXPECT_EQ(s.counters().interpenetration_passes, listed ? 3u : 0u);
   }
 }
 
-// Snapshots draw a contact as the solver sees it: from each sunk corner
+// Snapshots draw a contact as the solver sees it (its push): from each sunk corner
 // 0.05 up the ground's normal, not along the 0.05 √3 diagonal ray that the
 // full-ray drawing shows.
 TEST(Sim, SnapshotsDrawTheSolversSegment) {
-  Simulation s(scene_from(R"({"steps": 1, "effects": ["contacts"],
+  Simulation s(scene_from(R"({"steps": 1, "effects": ["contacts", "projected"], "narrow_phase": {"nearest_surface": false},
     "bodies": [{"box": [0.25, 0.25, 0.25], "pose": {"position": [0, 0, 0.2]}}]})"));
   s.step();
   const std::span<const Contact> contacts = s.last_narrow_phase().contacts;

@@ -62,9 +62,12 @@ void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>
 
 // Every contact of a pair against the true penetration at its point: the
 // exact distance to the target's nearest surface (0 outside) and the way
-// there. Ratios and angles only where the truth is deeper than epsilon.
+// there. A vertex contact's truth is its ray's (rays_from already measured
+// it); edge and sphere contacts are measured here. Ratios and angles only
+// where the truth is deeper than epsilon.
 void judge_truth(const StepResult& step, const PairResult& pr, const oracle::ExactShape& exact_a,
-                 const oracle::ExactShape& exact_b, const PosePair& poses, double epsilon,
+                 const oracle::ExactShape& exact_b, const std::vector<oracle::ExactRay>& rays_ab,
+                 const std::vector<oracle::ExactRay>& rays_ba, const PosePair& poses, double epsilon,
                  double allowance, PairMetrics& m, std::vector<double>& ratios, std::vector<double>& angles) {
   for (const Contact& c : step.contacts_of(pr)) {
     const bool into_b = c.source == Side::a;
@@ -72,22 +75,30 @@ void judge_truth(const StepResult& step, const PairResult& pr, const oracle::Exa
     if (!target.closed()) continue;
     const Pose& pose = into_b ? poses.b : poses.a;
     const Eigen::Vector3d p = pose.inverse().apply(c.origin);
-    const double truth = target.inside(p) ? target.distance(p) : 0.0;
+    double truth = 0.0;
+    if (c.kind == ContactKind::vertex) {
+      const oracle::ExactRay& e = (into_b ? rays_ab : rays_ba)[c.vertex];
+      truth = e.inside ? e.penetration : 0.0;
+    } else if (target.inside(p)) {
+      truth = target.distance(p);
+    }
     const double solver = c.push.norm();  // what a host's solver is asked to undo
     ++m.truth_checked;
     m.over_reports += solver > 1.25 * truth + allowance;
-    if (!(truth > epsilon)) continue;
+    if (!(truth > epsilon) || !(solver > 0.0)) continue;
     const double ratio = solver / truth;
     m.max_truth_ratio = std::max(m.max_truth_ratio, ratio);
     ratios.push_back(ratio);
     // The way to the nearest surface point; where several are as near (the
     // middle of a slab), the one the contact names if it is one of them.
-    Eigen::Vector3d way = pose.orientation * (target.closest_point(p) - p);
-    const Eigen::Vector3d named = pose.inverse().apply(c.origin + c.direction * c.depth);
-    if (c.depth <= truth + epsilon && target.distance(named) <= epsilon) way = c.direction;
-    if (c.push.norm() > 0.0 && way.norm() > 0.0)
-      angles.push_back(std::acos(std::clamp(c.push.normalized().dot(way.normalized()), -1.0, 1.0)) * 180.0 /
-                       std::numbers::pi);
+    const auto angle = [&](const Eigen::Vector3d& way) {
+      return std::acos(std::clamp(c.push.normalized().dot(way.normalized()), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+    };
+    double degrees = angle(pose.orientation * (target.closest_point(p) - p));
+    if (degrees > 1.0 && c.depth <= truth + epsilon &&
+        target.distance(pose.inverse().apply(c.origin + c.direction * c.depth)) <= epsilon)
+      degrees = angle(c.direction);
+    angles.push_back(degrees);
   }
 }
 
@@ -221,7 +232,7 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     s.time_exact += seconds_since(t);
     judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
     judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
-    judge_truth(step, pr, exact_a, exact_b, m.poses, epsilon, allowance, m, truth_ratios, push_angles);
+    judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, allowance, m, truth_ratios, push_angles);
     t = Clock::now();
     // Edge crossings, and a sphere's cap in a sphere or a box, in closed form.
     for (auto depths : {exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),

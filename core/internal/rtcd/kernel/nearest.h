@@ -10,35 +10,55 @@
 RTCD_INLINE rtcd_vec3 rtcd_add(rtcd_vec3 a, rtcd_vec3 b) { return rtcd_v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 RTCD_INLINE rtcd_vec3 rtcd_scale(rtcd_vec3 a, float s) { return rtcd_v3(a.x * s, a.y * s, a.z * s); }
 
+/* Worked relative to the triangle's first corner, scaled by the power of
+ * two nearest its size (exact): the Voronoi tests multiply four lengths,
+ * which would leave float's range at the sizes rtcd supports (1e-9 to
+ * 1e12); scaled, they stay near 1. */
 RTCD_INLINE float rtcd_point_triangle_distance2(rtcd_vec3 p, rtcd_vec3 a, rtcd_vec3 b, rtcd_vec3 c) {
-  rtcd_vec3 ab = rtcd_sub(b, a), ac = rtcd_sub(c, a), ap = rtcd_sub(p, a);
-  float d1 = rtcd_dot(ab, ap), d2 = rtcd_dot(ac, ap);
-  rtcd_vec3 q;
+  rtcd_vec3 ab = rtcd_sub(b, a), ac = rtcd_sub(c, a), ap = rtcd_sub(p, a), bp, cp, q, d;
+  float size = RTCD_FABS(ab.x), d1, d2, d3, d4, d5, d6, vc, vb, va, unit;
+  int e;
+  size = RTCD_FABS(ab.y) > size ? RTCD_FABS(ab.y) : size;
+  size = RTCD_FABS(ab.z) > size ? RTCD_FABS(ab.z) : size;
+  size = RTCD_FABS(ac.x) > size ? RTCD_FABS(ac.x) : size;
+  size = RTCD_FABS(ac.y) > size ? RTCD_FABS(ac.y) : size;
+  size = RTCD_FABS(ac.z) > size ? RTCD_FABS(ac.z) : size;
+  e = size > 0.0f ? RTCD_ILOGB(size) : 0;
+  unit = RTCD_LDEXP(1.0f, -e);
+  ab = rtcd_scale(ab, unit);
+  ac = rtcd_scale(ac, unit);
+  ap = rtcd_scale(ap, unit);
+  d1 = rtcd_dot(ab, ap);
+  d2 = rtcd_dot(ac, ap);
   if (d1 <= 0.0f && d2 <= 0.0f) {
-    q = a;
+    q = rtcd_v3(0.0f, 0.0f, 0.0f);
   } else {
-    rtcd_vec3 bp = rtcd_sub(p, b);
-    float d3 = rtcd_dot(ab, bp), d4 = rtcd_dot(ac, bp);
-    rtcd_vec3 cp = rtcd_sub(p, c);
-    float d5 = rtcd_dot(ab, cp), d6 = rtcd_dot(ac, cp);
-    float vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+    bp = rtcd_sub(ap, ab);
+    d3 = rtcd_dot(ab, bp);
+    d4 = rtcd_dot(ac, bp);
+    cp = rtcd_sub(ap, ac);
+    d5 = rtcd_dot(ab, cp);
+    d6 = rtcd_dot(ac, cp);
+    vc = d1 * d4 - d3 * d2;
+    vb = d5 * d2 - d1 * d6;
+    va = d3 * d6 - d5 * d4;
     if (d3 >= 0.0f && d4 <= d3) {
-      q = b;
+      q = ab;
     } else if (d6 >= 0.0f && d5 <= d6) {
-      q = c;
+      q = ac;
     } else if (vc <= 0.0f && d1 >= 0.0f && d3 <= 0.0f) {
-      q = rtcd_add(a, rtcd_scale(ab, d1 / (d1 - d3)));
+      q = rtcd_scale(ab, d1 / (d1 - d3));
     } else if (vb <= 0.0f && d2 >= 0.0f && d6 <= 0.0f) {
-      q = rtcd_add(a, rtcd_scale(ac, d2 / (d2 - d6)));
+      q = rtcd_scale(ac, d2 / (d2 - d6));
     } else if (va <= 0.0f && (d4 - d3) >= 0.0f && (d5 - d6) >= 0.0f) {
-      q = rtcd_add(b, rtcd_scale(rtcd_sub(c, b), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
+      q = rtcd_add(ab, rtcd_scale(rtcd_sub(ac, ab), (d4 - d3) / ((d4 - d3) + (d5 - d6))));
     } else {
       float denom = 1.0f / (va + vb + vc);
-      q = rtcd_add(a, rtcd_add(rtcd_scale(ab, vb * denom), rtcd_scale(ac, vc * denom)));
+      q = rtcd_add(rtcd_scale(ab, vb * denom), rtcd_scale(ac, vc * denom));
     }
   }
-  rtcd_vec3 d = rtcd_sub(p, q);
-  return rtcd_dot(d, d);
+  d = rtcd_sub(ap, q);
+  return RTCD_LDEXP(rtcd_dot(d, d), 2 * e);
 }
 
 #endif

@@ -13,6 +13,8 @@
 #define RTCD_INLINE static inline
 #define RTCD_SQRT(x) sqrt(x)
 #define RTCD_FABS(x) fabs(x)
+#define RTCD_ILOGB(x) ilogb(x)
+#define RTCD_LDEXP(x, e) ldexp(x, e)
 typedef uint rtcd_uint;
 typedef int rtcd_int;
 typedef uchar rtcd_uchar;
@@ -29,6 +31,8 @@ typedef uchar rtcd_uchar;
 #define RTCD_INLINE static inline
 #define RTCD_SQRT(x) sqrtf(x)
 #define RTCD_FABS(x) fabsf(x)
+#define RTCD_ILOGB(x) ilogbf(x)
+#define RTCD_LDEXP(x, e) ldexpf(x, e)
 typedef uint32_t rtcd_uint;
 typedef int32_t rtcd_int;
 typedef uint8_t rtcd_uchar;

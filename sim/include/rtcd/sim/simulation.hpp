@@ -55,6 +55,11 @@ struct StepRecord {
   // (Config::nearest_surface): the true penetration, summed and deepest.
   double true_penetration = -1;
   double deepest_true = -1;
+  // Pairs deeper than 2% of their smaller body's size (its bounding
+  // diameter), and the longest any has been held so, in steps (passes in a
+  // row times the pass's period).
+  size_t deep_pairs = 0;
+  uint64_t longest_deep_run = 0;
   size_t interpenetration_pairs = 0;
 };
 
@@ -95,10 +100,18 @@ class Simulation {
   const StageCounters& counters() const;
   std::string backend() const;
   std::vector<std::string> devices() const;
+  // The scene's bodies, in the order they were added (the ground is not
+  // one): the numbering of contacts() and pairs().
   std::vector<BodyState> bodies() const;
-  // The narrow phase's answer on the last step (contacts, predictive rays).
+  // The narrow phase's answer on the last step (contacts, predictive rays),
+  // and the broad phase's pairs that step handed it, with bodies numbered
+  // as bodies() numbers them: body k is bodies()[k]; the ground is kGround.
+  static constexpr uint32_t kGround = UINT32_MAX;
+  StepResult contacts() const;
+  std::vector<BodyPair> pairs() const;
+  // The same with the narrow phase's own BodyIds (the ground takes one;
+  // body_kinds() and shape_poses() are numbered by them).
   const StepResult& last_narrow_phase() const;
-  // The broad phase's pairs that step handed rtcd's narrow phase.
   std::span<const BodyPair> last_pairs() const;
 
   // Every body the narrow phase knows, by BodyId, the ground included: the
