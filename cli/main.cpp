@@ -17,6 +17,7 @@
 #include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
+#include "rtcd/validation/families.hpp"
 
 namespace {
 
@@ -128,7 +129,9 @@ int main(int argc, char** argv) {
   auto* validate = app.add_subcommand(
       "validate", "Judge a backend on random pairs against the exact reference, FCL, GIMPACT and libccd");
   validate->add_option("--backend", v.backend, "basic, embree, opencl[-basic][:...] or auto (default: every usable backend)");
-  validate->add_option("--family", v.family, "convex, concave, torus, plates, highres or primitives (default: all)");
+  std::string families;
+  for (const auto& name : rtcd::validation::family_names()) families += (families.empty() ? "" : ", ") + name;
+  validate->add_option("--family", v.family, families + " (default: all)");
   validate->add_option("--pairs", v.pairs, "Random pairs per family")->check(CLI::Range(size_t(1), size_t(10'000'000)));
   validate->add_option("--seed", v.seed, "Seed of the random poses");
   validate->add_option("--mode", v.mode, "full, or iterative (a full step, then 4 steps of a fixed motion, the last judged)");

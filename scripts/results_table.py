@@ -32,7 +32,8 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join("docs", "results")
 
 # The folders, in the order docs/results/README.md lists them.
-FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "opencl", "threshold-sweep", "accuracy-sweep",
+FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "opencl", "threshold-sweep",
+           "accuracy-sweep",
            "edges", "python"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
@@ -307,6 +308,44 @@ def validation_rows():
     return rows
 
 
+def truth_rows():
+    m = meta("truth")
+    runs = {name: read_json("truth", f"{name}.json") for name in ("on", "off")}
+    rows = []
+    for name, label in (("on", "nearest surface (default)"), ("off", "ray contacts (thesis)")):
+        summaries = runs[name]
+        if not summaries:
+            raise ResultError(f"{RESULTS}/truth/{name}.json: no family")
+        contacts = sum(s["truth"]["contacts"] for s in summaries)
+        over = sum(s["truth"]["over_reports"] for s in summaries)
+        worst = max(s["truth"]["depth_ratio"]["max"] for s in summaries)
+        angle = max(s["truth"]["push_angle_degrees"]["p95"] for s in summaries)
+        rows.append(Row(f"contacts against the true penetration, {len(summaries)} families, full mode, {label}: "
+                        "deeper than 1.25× it; worst depth over it; worst family's push-angle p95",
+                        f"{over} of {contacts}; {worst:.3g}×; {angle:.1f}°", "truth", "truth/README.md", [m]))
+    cost = [on["seconds_per_pair"]["ours"] / off["seconds_per_pair"]["ours"]
+            for on, off in zip(runs["on"], runs["off"]) if off["seconds_per_pair"]["ours"] > 0]
+    rows.append(Row("nearest-surface contacts' cost, time per pair on ÷ off (random deep poses)",
+                    span(cost, lambda x: f"{x:.2f}×"), "truth", "truth/README.md", [m]))
+    return rows
+
+
+def zoo_rows():
+    m = meta("zoo")
+    z = read_json("zoo", "zoo.json")
+    for key in ("deepest_true", "summed_true", "longest_deep_run_steps"):
+        if key not in z:
+            raise ResultError(f"{RESULTS}/zoo/zoo.json: no {key}")
+    d, s, run = z["deepest_true"], z["summed_true"], z["longest_deep_run_steps"]
+    return [Row(f"zoo scene from {z['from_time']} s: deepest true penetration, rtcd- / GIMPACT-hosted (most over "
+                "the steps)", f"{1000 * d['rtcd_max']:.1f} / {1000 * d['gimpact_max']:.1f} mm", "zoo",
+                "zoo/README.md", [m]),
+            Row(f"zoo scene from {z['from_time']} s: summed true penetration, rtcd- / GIMPACT-hosted (most)",
+                f"{s['rtcd_max']:.3g} / {s['gimpact_max']:.3g}", "zoo", "zoo/README.md", [m]),
+            Row("zoo scene: longest a pair stays deeper than 2% of its smaller body, rtcd- / GIMPACT-hosted "
+                "(goal ≤ 30 steps)", f"{run['rtcd']:.0f} / {run['gimpact']:.0f} steps", "zoo", "zoo/README.md", [m])]
+
+
 def benchmark_medians(folder, name):
     """Median real time (µs) of each benchmark in Google Benchmark's JSON
     (NAME.json) or, failing that, its console output (NAME.txt)."""
@@ -383,8 +422,8 @@ def python_rows():
 
 
 def all_rows():
-    return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + opencl_rows()
-            + python_rows())
+    return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + truth_rows()
+            + zoo_rows() + opencl_rows() + python_rows())
 
 
 # ---------------------------------------------------------------- blocks
