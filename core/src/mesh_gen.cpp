@@ -30,6 +30,19 @@ Mesh make(const std::vector<Eigen::Vector3d>& p, const std::vector<Tri>& t) {
   return in_first_use_order(pf, t);
 }
 
+// The triangles of a tube closed on itself: `rings` rings of `sides`
+// vertices each, ring after ring (torus, knot), two triangles per quad.
+std::vector<Tri> closed_tube(int rings, int sides) {
+  std::vector<Tri> t;
+  auto at = [&](int i, int j) { return uint32_t((i % rings) * sides + (j % sides)); };
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < sides; ++j) {
+      t.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      t.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return t;
+}
+
 // Unit sphere as a latitude/longitude grid: `segments` around, `rings`
 // interior latitude circles, plus two poles.
 void uv_sphere(int segments, int rings, std::vector<Eigen::Vector3d>& p, std::vector<Tri>& t) {
@@ -150,7 +163,6 @@ Mesh torus(double major_radius, double minor_radius, int nu, int nv) {
   if (nu < 3 || nv < 3 || !(minor_radius > 0) || !(major_radius > minor_radius))
     throw UsageError("torus needs >= 3 segments each way and major_radius > minor_radius > 0");
   std::vector<Eigen::Vector3d> p;
-  std::vector<Tri> t;
   for (int i = 0; i < nu; ++i) {
     const double u = 2 * pi * i / nu;
     for (int j = 0; j < nv; ++j) {
@@ -159,13 +171,7 @@ Mesh torus(double major_radius, double minor_radius, int nu, int nv) {
       p.emplace_back(r * std::cos(u), r * std::sin(u), minor_radius * std::sin(v));
     }
   }
-  auto at = [&](int i, int j) { return uint32_t((i % nu) * nv + (j % nv)); };
-  for (int i = 0; i < nu; ++i)
-    for (int j = 0; j < nv; ++j) {
-      t.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-      t.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
-  return make(p, t);
+  return make(p, closed_tube(nu, nv));
 }
 
 Mesh concave_blob(int triangles, uint32_t seed, double radius) {
@@ -310,20 +316,13 @@ Mesh torus_knot(int pk, int qk, double radius, double tube_radius, int segments,
         throw UsageError("torus_knot: the tube is too thick for its knot and would cut itself");
     }
   std::vector<Eigen::Vector3d> p;
-  std::vector<Tri> t;
   for (int i = 0; i < segments; ++i)
     for (int j = 0; j < sides; ++j) {
       const double v = 2 * pi * j / sides;
       // cos v * N - sin v * B runs the way that makes the triangles below face out.
       p.push_back(centre[i] + tube_radius * (std::cos(v) * normal[i] - std::sin(v) * binormal[i]));
     }
-  auto at = [&](int i, int j) { return uint32_t((i % segments) * sides + (j % sides)); };
-  for (int i = 0; i < segments; ++i)
-    for (int j = 0; j < sides; ++j) {
-      t.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
-      t.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
-    }
-  return make(p, t);
+  return make(p, closed_tube(segments, sides));
 }
 
 Mesh gear(int teeth, double root_radius, double tip_radius, double half_thickness) {
