@@ -215,6 +215,12 @@ int run_scene(const RunOptions& o, fs::path* folder) {
         {"deep_pairs", last.deep_pairs},
         {"longest_deep_run_steps", last.longest_deep_run},
         {"pairs", last.interpenetration_pairs}};
+  if (last.longest_deep_run > 0) {
+    const auto bodies = simulation.bodies();
+    const auto label = [&](uint32_t k) { return k < bodies.size() ? bodies[k].label : std::string("ground"); };
+    summary["totals"]["final_interpenetration"]["longest_deep_pair"] = {label(last.longest_deep_pair.a),
+                                                                          label(last.longest_deep_pair.b)};
+  }
   if (!failure.empty()) summary["error"] = failure;
 
   std::vector<std::string> plots;

@@ -45,6 +45,7 @@ py::dict record_dict(const sim::StepRecord& r) {
   d["interpenetration_pairs"] = r.interpenetration_pairs;
   d["deep_pairs"] = r.deep_pairs;
   d["longest_deep_run"] = r.longest_deep_run;
+  d["longest_deep_pair"] = py::make_tuple(r.longest_deep_pair.a, r.longest_deep_pair.b);
   return d;
 }
 

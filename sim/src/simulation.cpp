@@ -466,17 +466,26 @@ void Simulation::Impl::measure() {
   };
   deep_runs_next.clear();
   uint32_t longest = 0;
+  BodyPair held{};
   for (const PairResult& p : t.pairs) {
     if (!(p.max_depth > 0.02 * std::min(size(p.pair.a), size(p.pair.b)))) continue;
     const uint64_t key = pair_key(p.pair.a, p.pair.b);
     const auto before = deep_runs.find(key);
     const uint32_t run = (before == deep_runs.end() ? 0 : before->second) + 1;
     deep_runs_next[key] = run;
-    longest = std::max(longest, run);
+    if (run > longest) longest = run, held = p.pair;
   }
   deep_runs.swap(deep_runs_next);
   record.deep_pairs = deep_runs.size();
   record.longest_deep_run = uint64_t(longest) * scene.interpenetration_every;
+  // Named as bodies() numbers them (the ground not counted).
+  const auto number = [&](BodyId id) {
+    if (bodies[id].spec == SIZE_MAX) return Simulation::kGround;
+    uint32_t n = 0;
+    for (BodyId k = 0; k < id; ++k) n += bodies[k].spec != SIZE_MAX;
+    return n;
+  };
+  record.longest_deep_pair = longest ? BodyPair{number(held.a), number(held.b)} : BodyPair{};
   record.interpenetration_pairs = pairs.size();
   ++counters.interpenetration_passes;
 }

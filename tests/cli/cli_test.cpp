@@ -59,7 +59,9 @@ TEST(Cli, QueryHandComputedCubesJson) {
         EXPECT_EQ(c["source"], "a");
         EXPECT_NEAR(c["depth"].get<double>(), rays ? 0.1 * std::sqrt(3.0) : 0.1, 1e-6);
         EXPECT_NEAR(c["projected_depth"].get<double>(), 0.1, 1e-6);
-        if (rays) EXPECT_NEAR(c["normal"][0].get<double>(), -1.0, 1e-6);
+        if (rays) {
+          EXPECT_NEAR(c["normal"][0].get<double>(), -1.0, 1e-6);
+        }
       }
     }
 }

@@ -60,6 +60,7 @@ struct StepRecord {
   // row times the pass's period).
   size_t deep_pairs = 0;
   uint64_t longest_deep_run = 0;
+  BodyPair longest_deep_pair;  // the pair held so, numbered as Simulation::bodies() (kGround: the ground)
   size_t interpenetration_pairs = 0;
 };
 
