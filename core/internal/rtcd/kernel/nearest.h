@@ -10,10 +10,11 @@
 RTCD_INLINE rtcd_vec3 rtcd_add(rtcd_vec3 a, rtcd_vec3 b) { return rtcd_v3(a.x + b.x, a.y + b.y, a.z + b.z); }
 RTCD_INLINE rtcd_vec3 rtcd_scale(rtcd_vec3 a, float s) { return rtcd_v3(a.x * s, a.y * s, a.z * s); }
 
-/* Worked relative to the triangle's first corner, scaled by the power of
- * two nearest its size (exact): the Voronoi tests multiply four lengths,
- * which would leave float's range at the sizes rtcd supports (1e-9 to
- * 1e12); scaled, they stay near 1. */
+/* Worked relative to the triangle's first corner. The Voronoi tests
+ * multiply four lengths, which would leave float's range at the sizes rtcd
+ * supports (1e-9 to 1e12): a triangle outside 2^-20 .. 2^20 across is
+ * scaled by the power of two nearest its size (exact), so they stay near
+ * 1; the common sizes skip the scaling's two library calls. */
 RTCD_INLINE float rtcd_point_triangle_distance2(rtcd_vec3 p, rtcd_vec3 a, rtcd_vec3 b, rtcd_vec3 c) {
   rtcd_vec3 ab = rtcd_sub(b, a), ac = rtcd_sub(c, a), ap = rtcd_sub(p, a), bp, cp, q, d;
   float size = RTCD_FABS(ab.x), d1, d2, d3, d4, d5, d6, vc, vb, va, unit;
@@ -23,11 +24,13 @@ RTCD_INLINE float rtcd_point_triangle_distance2(rtcd_vec3 p, rtcd_vec3 a, rtcd_v
   size = RTCD_FABS(ac.x) > size ? RTCD_FABS(ac.x) : size;
   size = RTCD_FABS(ac.y) > size ? RTCD_FABS(ac.y) : size;
   size = RTCD_FABS(ac.z) > size ? RTCD_FABS(ac.z) : size;
-  e = size > 0.0f ? RTCD_ILOGB(size) : 0;
-  unit = RTCD_LDEXP(1.0f, -e);
-  ab = rtcd_scale(ab, unit);
-  ac = rtcd_scale(ac, unit);
-  ap = rtcd_scale(ap, unit);
+  e = size > 0.0f && (size < 9.5367431640625e-7f || size > 1048576.0f) ? RTCD_ILOGB(size) : 0;
+  if (e != 0) {
+    unit = RTCD_LDEXP(1.0f, -e);
+    ab = rtcd_scale(ab, unit);
+    ac = rtcd_scale(ac, unit);
+    ap = rtcd_scale(ap, unit);
+  }
   d1 = rtcd_dot(ab, ap);
   d2 = rtcd_dot(ac, ap);
   if (d1 <= 0.0f && d2 <= 0.0f) {
@@ -58,7 +61,7 @@ RTCD_INLINE float rtcd_point_triangle_distance2(rtcd_vec3 p, rtcd_vec3 a, rtcd_v
     }
   }
   d = rtcd_sub(ap, q);
-  return RTCD_LDEXP(rtcd_dot(d, d), 2 * e);
+  return e != 0 ? RTCD_LDEXP(rtcd_dot(d, d), 2 * e) : rtcd_dot(d, d);
 }
 
 #endif
