@@ -5,7 +5,8 @@
 //   points need, so no point is dropped by Bullet's own reduction;
 // - the breaking threshold: the solver skips points farther apart than a
 //   manifold's processing threshold, and refreshContactPoints drops them past
-//   the breaking one; both are set to the distance extension, and the points
+//   the breaking one; both are set to the distance extension (unlimited where
+//   it is derived per pair), and the points
 //   are never refreshed by Bullet (they are rewritten every step);
 // - hand-written points carry no combined friction or restitution: set here
 //   from the linked bodies (products, as Bullet combines them);

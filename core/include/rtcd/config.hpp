@@ -46,7 +46,7 @@ struct Config {
 
   // How far outside the other body a vertex is still tracked by a predictive
   // ray, and how much both bounding boxes grow before selecting candidate
-  // vertices. Range [0, 1e30), and >= displacement_threshold. Derived: a
+  // vertices. Range [0, 1e12], and >= displacement_threshold. Derived: a
   // tenth of the smaller body's radius, or twice the pair's last motion if
   // that is more (at most the radius). Cost: more candidate vertices and longer predictive rays.
   std::optional<double> distance_extension;

@@ -1,7 +1,7 @@
 /* Plain types and vector helpers for the per-ray kernel code.
  * This header and its siblings are written in the subset of C that is valid
  * C++ and valid OpenCL C 1.2, so the CPU backends and the device compile the
- * same text. Only sqrt and fabs are used from the math library. Compile
+ * same text. Only sqrt, fabs, ilogb and ldexp are used from the math library. Compile
  * without floating-point contraction on both sides (-ffp-contract=off; the
  * pragma below for OpenCL) so both agree bit for bit on walk decisions. */
 #ifndef RTCD_KERNEL_TYPES_H
