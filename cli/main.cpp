@@ -6,14 +6,15 @@
 
 #include <CLI/CLI.hpp>
 
-#include "bench.hpp"
-#include "check.hpp"
-#include "inputs.hpp"
-#include "knobs.hpp"
-#include "replay.hpp"
-#include "report.hpp"
-#include "run.hpp"
-#include "validate.hpp"
+#include "knob_options.hpp"
+#include "rtcd/app/bench.hpp"
+#include "rtcd/app/check.hpp"
+#include "rtcd/app/inputs.hpp"
+#include "rtcd/app/knobs.hpp"
+#include "rtcd/app/replay.hpp"
+#include "rtcd/app/report.hpp"
+#include "rtcd/app/run.hpp"
+#include "rtcd/app/validate.hpp"
 #include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
@@ -27,7 +28,7 @@ struct QueryOptions {
   std::string a, b, pose_a, pose_b, backend = "auto", mode = "auto", sequence;
   bool json = false;
   rtcd::MeshOptions mesh_options;
-  rtcd::cli::Knobs knobs;
+  rtcd::app::Knobs knobs;
   double sampling = 0.0;
 };
 
@@ -48,18 +49,18 @@ int run_query(const QueryOptions& o) {
   config.mode = rtcd::parse_mode(o.mode);
   config.validate();
 
-  std::vector<rtcd::cli::SequenceStep> steps;
+  std::vector<rtcd::app::SequenceStep> steps;
   if (!o.sequence.empty()) {
     if (!o.pose_a.empty() || !o.pose_b.empty()) throw rtcd::UsageError("--sequence replaces --pose-a and --pose-b");
-    steps = rtcd::cli::read_sequence(o.sequence);
+    steps = rtcd::app::read_sequence(o.sequence);
   } else {
-    rtcd::cli::SequenceStep s;
-    if (!o.pose_a.empty()) s.a = rtcd::cli::parse_pose(o.pose_a, "--pose-a");
-    if (!o.pose_b.empty()) s.b = rtcd::cli::parse_pose(o.pose_b, "--pose-b");
+    rtcd::app::SequenceStep s;
+    if (!o.pose_a.empty()) s.a = rtcd::app::parse_pose(o.pose_a, "--pose-a");
+    if (!o.pose_b.empty()) s.b = rtcd::app::parse_pose(o.pose_b, "--pose-b");
     steps.push_back(s);
   }
-  auto shape_a = rtcd::cli::parse_shape(o.a, o.sampling, o.mesh_options);
-  auto shape_b = o.b == o.a ? shape_a : rtcd::cli::parse_shape(o.b, o.sampling, o.mesh_options);
+  auto shape_a = rtcd::app::parse_shape(o.a, o.sampling, o.mesh_options);
+  auto shape_b = o.b == o.a ? shape_a : rtcd::app::parse_shape(o.b, o.sampling, o.mesh_options);
   const double ratio = std::max(shape_a->radius(), shape_b->radius()) / std::min(shape_a->radius(), shape_b->radius());
   if (ratio > rtcd::kMaxSizeRatio)
     std::cerr << "rtcd: warning: the bodies' sizes differ by " << ratio << " (supported up to " << rtcd::kMaxSizeRatio
@@ -78,11 +79,11 @@ int run_query(const QueryOptions& o) {
     narrow->set_pose(b, steps[i].b);
     const rtcd::StepResult r = narrow->detect(std::span(&pair, 1));
     if (o.json) {
-      all.push_back(rtcd::cli::to_json(r));
+      all.push_back(rtcd::app::to_json(r));
     } else {
       if (steps.size() > 1) std::cout << "step " << i << ":\n";
       if (i == 0) std::cout << "backend: " << narrow->name() << "\n";
-      rtcd::cli::print_table(std::cout, r);
+      rtcd::app::print_table(std::cout, r);
     }
   }
   if (o.json) std::cout << (o.sequence.empty() ? all[0] : all).dump(2) << '\n';
@@ -117,14 +118,14 @@ int main(int argc, char** argv) {
                   "Join vertices at identical positions (triangle soups); ids then count the joined vertices");
   query->add_flag("--json", q.json, "Print JSON");
 
-  rtcd::cli::CheckOptions c;
+  rtcd::app::CheckOptions c;
   auto* check = app.add_subcommand(
       "check", "Check mesh files: topology, orientation, self-intersections, sizes. Exit 0 fit, 1 defect, 2 unreadable");
   check->add_option("MESH", c.files, "Mesh files (.obj .off .ply .stl)")->required();
   check->add_flag("--json", c.json, "Print JSON");
   check->add_flag("--weld", c.weld, "Join vertices at identical positions before checking");
 
-  rtcd::cli::ValidateOptions v;
+  rtcd::app::ValidateOptions v;
   bool sweep = false;
   auto* validate = app.add_subcommand(
       "validate", "Judge a backend on random pairs against the exact reference, FCL, GIMPACT and libccd");
@@ -141,7 +142,7 @@ int main(int argc, char** argv) {
   validate->add_flag("--sweep", sweep, "Sweep the accuracy knobs; write CSV (see --csv)");
   validate->add_option("--csv", v.sweep_csv, "Where --sweep writes its CSV (default: standard output)");
 
-  rtcd::cli::RunOptions r;
+  rtcd::app::RunOptions r;
   uint64_t run_steps = 0;
   auto* run = app.add_subcommand("run", "Simulate a scene on Bullet with rtcd's narrow phase (default: a small avalanche)");
   run->add_option("SCENE", r.scene, "Scene file (data/scenes/*.json; schema in docs/scenes.md)");
@@ -175,7 +176,7 @@ int main(int argc, char** argv) {
   bench->add_option("--seeds", bo.seeds, "Seeds per interpenetration variant")->check(CLI::Range(1, 100));
   bench->add_flag("--no-plots", bench_no_plots, "Skip the PNG plots");
 
-  rtcd::cli::ReplayOptions ro;
+  rtcd::app::ReplayOptions ro;
   auto* replay = app.add_subcommand(
       "replay", "Replay a recording (from rtcd bench) through one narrow-phase configuration: time per stage and phase");
   replay->add_option("RECORDING", ro.recording, "recording.rtcdrec")->required();
@@ -191,24 +192,24 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
     if (*backends) return run_backends(backends_json);
     if (*knobs) {
-      rtcd::cli::print_knobs(std::cout);
+      rtcd::app::print_knobs(std::cout);
       return 0;
     }
     if (*bench) {
       bo.command = "rtcd";
       for (int i = 1; i < argc; ++i) bo.command += std::string(" ") + argv[i];
-      return rtcd::cli::run_bench(bo, !bench_no_plots);
+      return rtcd::app::run_bench(bo, !bench_no_plots);
     }
     if (*run) {
       if (run_steps > 0) r.steps = run_steps;
-      return rtcd::cli::run_scene(r);
+      return rtcd::app::run_scene(r);
     }
-    if (*check) return rtcd::cli::run_check(c);
-    if (*replay) return rtcd::cli::run_replay(ro);
+    if (*check) return rtcd::app::run_check(c);
+    if (*replay) return rtcd::app::run_replay(ro);
     if (*validate) {
       if (sweep && v.sweep_csv.empty()) v.sweep_csv = "-";
       if (!sweep && !v.sweep_csv.empty()) throw rtcd::UsageError("--csv needs --sweep");
-      return rtcd::cli::run_validate(v);
+      return rtcd::app::run_validate(v);
     }
     return run_query(q);
   } catch (const CLI::CallForHelp& e) {

@@ -1,5 +1,5 @@
 // libFuzzer harness: the input is the JSON of a pose sequence
-// (`rtcd query --sequence`), read by rtcd::cli::read_sequence, then stepped
+// (`rtcd query --sequence`), read by rtcd::app::read_sequence, then stepped
 // on a fixed pair of 902-triangle concave blobs (blob_902 and stream_902 of
 // data/meshes) with the pair state carried across steps, as the CLI does.
 // rtcd::Error (UsageError for bad JSON or poses) is the accepted failure;
@@ -14,7 +14,7 @@
 #include <tbb/global_control.h>
 #include <unistd.h>
 
-#include "inputs.hpp"
+#include "rtcd/app/inputs.hpp"
 #include "invariants.hpp"
 #include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
@@ -50,10 +50,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     std::ofstream out(path, std::ios::binary | std::ios::trunc);
     out.write(reinterpret_cast<const char*>(data), std::streamsize(size));
   }
-  std::vector<cli::SequenceStep> steps;
+  std::vector<app::SequenceStep> steps;
   bool valid = true;
   try {
-    steps = cli::read_sequence(path.string());
+    steps = app::read_sequence(path.string());
   } catch (const Error& e) {
     valid = false;  // malformed sequences are rejected by design
     if (verbose) std::fprintf(stderr, "%s\n", e.what());

@@ -4,7 +4,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "inputs.hpp"
+#include "rtcd/app/inputs.hpp"
 #include "module.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/sim/recording.hpp"
@@ -94,32 +94,17 @@ py::array_t<uint32_t, py::array::c_style> index_rows(py::handle object, const ch
   return out;
 }
 
-namespace {
-
-Pose pose_from(const double* v, const std::string& name) {
-  Pose p;
-  p.position = {v[0], v[1], v[2]};
-  p.orientation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
-  try {
-    return checked(p);
-  } catch (const UsageError& e) {
-    throw UsageError(name + ": " + e.what());
-  }
-}
-
-}  // namespace
-
 Pose pose_of(py::handle object, const char* name) {
   if (object.is_none()) return Pose{};
   const auto a = float_rows(object, name, 7, true);
   if (a.ndim() != 1) throw UsageError(std::string(name) + ": expected one pose of 7 numbers, got " + shape_text(a));
-  return pose_from(a.data(), name);
+  return app::pose_from(a.data(), name);
 }
 
 std::vector<Pose> poses_of(py::handle object, const char* name) {
   const auto a = float_rows(object, name, 7);
   std::vector<Pose> poses(size_t(a.shape(0)));
-  for (size_t i = 0; i < poses.size(); ++i) poses[i] = pose_from(a.data(i, 0), std::string(name) + ": row " + std::to_string(i));
+  for (size_t i = 0; i < poses.size(); ++i) poses[i] = app::pose_from(a.data(i, 0), std::string(name) + ": row " + std::to_string(i));
   return poses;
 }
 
@@ -136,7 +121,7 @@ std::shared_ptr<const Shape> shape_of(py::handle object, const char* name) {
                        py::str(py::type::of(object).attr("__name__")).cast<std::string>());
 }
 
-void add_knobs(const py::kwargs& kwargs, cli::Knobs& knobs) {
+void add_knobs(const py::kwargs& kwargs, app::Knobs& knobs) {
   for (const auto& [key, value] : kwargs) {
     const std::string name = key.cast<std::string>();
     const Knob* knob = find_knob(name);
@@ -162,7 +147,7 @@ void add_knobs(const py::kwargs& kwargs, cli::Knobs& knobs) {
 }
 
 Config config_of(const py::kwargs& kwargs) {
-  cli::Knobs knobs;
+  app::Knobs knobs;
   add_knobs(kwargs, knobs);
   Config c = knobs.config();
   c.validate();

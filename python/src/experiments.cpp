@@ -5,8 +5,8 @@
 #include "rtcd/sim/scene.hpp"
 #include "rtcd/sim/simulation.hpp"
 #include "rtcd/validation/families.hpp"
-#include "run.hpp"
-#include "validate.hpp"
+#include "rtcd/app/run.hpp"
+#include "rtcd/app/validate.hpp"
 
 namespace rtcd::python {
 namespace {
@@ -63,7 +63,7 @@ void bind_experiments(py::module_& m) {
       "validate",
       [](py::object family, py::object backend, const std::string& mode, size_t pairs, uint64_t seed, bool oracles,
          const py::kwargs& knobs) {
-        cli::ValidateOptions o;
+        app::ValidateOptions o;
         if (!family.is_none()) o.family = family.cast<std::string>();
         if (!backend.is_none()) o.backend = backend.cast<std::string>();
         o.mode = mode;
@@ -76,7 +76,7 @@ void bind_experiments(py::module_& m) {
         nlohmann::json result;
         {
           py::gil_scoped_release release;
-          result = cli::validate_json(o);
+          result = app::validate_json(o);
         }
         return to_python(result);
       },
@@ -196,7 +196,7 @@ record; poses, velocities and contacts are the state after it.)")
       "run",
       [](py::object scene, const std::string& backend, std::optional<uint64_t> steps, int threads, py::object out,
          py::object record, bool plots, bool full_rays) {
-        cli::RunOptions o;
+        app::RunOptions o;
         if (!scene.is_none()) o.scene = text_of(scene);
         o.backend = backend;
         if (steps) {
@@ -212,7 +212,7 @@ record; poses, velocities and contacts are the state after it.)")
         int code = 0;
         {
           py::gil_scoped_release release;
-          code = cli::run_scene(o, &folder);
+          code = app::run_scene(o, &folder);
         }
         py::object summary = py::module_::import("json").attr("loads")(
             py::module_::import("pathlib").attr("Path")((folder / "summary.json").string()).attr("read_text")());

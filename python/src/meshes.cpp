@@ -1,5 +1,5 @@
 // rtcd.Mesh, rtcd.Shape, rtcd.gen and the mesh checker.
-#include "check.hpp"
+#include "rtcd/app/check.hpp"
 #include "module.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_check.hpp"
@@ -121,7 +121,7 @@ the mesh (no copy; each keeps the mesh alive).)")
       .def(
           "check",
           [](const PyMesh& p) {
-            return to_python(cli::to_json(check_mesh(p.mesh().positions(), p.mesh().triangles())));
+            return to_python(app::to_json(check_mesh(p.mesh().positions(), p.mesh().triangles())));
           },
           "The checker's findings, as `rtcd check --json` prints them for one file.")
       .def(
@@ -137,7 +137,7 @@ the mesh (no copy; each keeps the mesh alive).)")
       "check_mesh",
       [](py::handle vertices, py::handle triangles) {
         const MeshData d = data_of(vertices, triangles);
-        return to_python(cli::to_json(check_mesh(d.positions, d.triangles)));
+        return to_python(app::to_json(check_mesh(d.positions, d.triangles)));
       },
       py::arg("vertices"), py::arg("triangles"),
       "The checker's findings on vertices and triangles as given (never raises on a defect).");
@@ -146,7 +146,7 @@ the mesh (no copy; each keeps the mesh alive).)")
       [](const std::filesystem::path& path, bool weld) {
         MeshData d = read_mesh_file(path);
         if (weld) weld_coincident(d.positions, d.triangles);
-        return to_python(cli::to_json(check_mesh(d.positions, d.triangles)));
+        return to_python(app::to_json(check_mesh(d.positions, d.triangles)));
       },
       py::arg("path"), py::arg("weld") = false, "The checker's findings on a mesh file, as `rtcd check --json`.");
 

@@ -17,7 +17,7 @@
 #include "rtcd/results.hpp"
 #include "rtcd/shape.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 struct Knobs;
 }
 
@@ -53,7 +53,7 @@ py::array_t<double> pose_array(const Pose& pose);
 
 // Keyword arguments named as the knobs of rtcd::knobs(): ConfigError for
 // an unknown name or a value of the wrong kind.
-void add_knobs(const py::kwargs& kwargs, cli::Knobs& knobs);
+void add_knobs(const py::kwargs& kwargs, app::Knobs& knobs);
 Config config_of(const py::kwargs& kwargs);
 
 // JSON as Python's dicts, lists, numbers and strings.

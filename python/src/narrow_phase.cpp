@@ -5,9 +5,9 @@
 #include <optional>
 #include <sstream>
 
-#include "inputs.hpp"
+#include "rtcd/app/inputs.hpp"
 #include "module.hpp"
-#include "report.hpp"
+#include "rtcd/app/report.hpp"
 #include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 
@@ -278,7 +278,7 @@ Each array is built on first access and kept.)")
                              })
       .def_property_readonly("stats",
                              [](PyStep& s) {
-                               if (!s.stats) s.stats = to_python(cli::stats_json(s.step->stats));
+                               if (!s.stats) s.stats = to_python(app::stats_json(s.step->stats));
                                return s.stats;
                              })
       .def(
@@ -289,7 +289,7 @@ Each array is built on first access and kept.)")
                                     std::to_string(s.step->pairs.size()) + " pairs");
             StepResult one = *s.step;  // the contact ranges index the whole step's records
             one.pairs = {s.step->pairs[pair]};
-            return to_python(cli::to_json(one));
+            return to_python(app::to_json(one));
           },
           py::arg("pair") = 0, "One pair's result as `rtcd query --json` prints it.")
       .def("__repr__", [](const PyStep& s) {
@@ -444,11 +444,13 @@ call at a time (others wait), two narrow phases run in parallel.)";
           const bool ranged = k.type == KnobType::count || k.type == KnobType::length;
           d["min"] = ranged ? py::object(py::float_(k.min)) : py::none();
           d["max"] = ranged ? py::object(py::float_(k.max)) : py::none();
+          d["off"] = k.off ? py::object(py::str(k.off)) : py::none();
           out.append(d);
         }
         return out;
       },
-      "The narrow phase's knobs: name, type, range, default, meaning, cost (docs/knobs.md).");
+      "The narrow phase's knobs: name, type, range, default, meaning, cost, and for switches what turning one off "
+      "does (docs/knobs.md).");
 }
 
 }  // namespace rtcd::python

@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <set>
@@ -12,6 +13,8 @@
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
+
+#include "rtcd/config.hpp"
 
 namespace {
 
@@ -80,6 +83,29 @@ TEST(Cli, KnobsDocIsTheTable) {
   ASSERT_NE(to, std::string::npos);
   EXPECT_EQ(doc.substr(from + begin.size(), to - from - begin.size()), r.out)
       << "docs/knobs.md disagrees with the table: regenerate it from `rtcd knobs`";
+}
+
+// Each --no-KNOB option's help begins with what turning the knob off does
+// (the knob table's `off`), in every command that takes the knobs.
+TEST(Cli, SwitchHelpSaysWhatOffDoes) {
+  for (const std::string command : {"query", "validate", "replay"}) {
+    const Outcome r = run(command + " --help");
+    ASSERT_EQ(r.code, 0) << r.out;
+    size_t switches = 0;
+    for (const rtcd::Knob& knob : rtcd::knobs()) {
+      if (knob.type != rtcd::KnobType::flag) continue;
+      ++switches;
+      ASSERT_NE(knob.off, nullptr) << knob.name;
+      std::string option = "--no-" + std::string(knob.name);
+      std::replace(option.begin(), option.end(), '_', '-');
+      const size_t at = r.out.find(option + " ");
+      ASSERT_NE(at, std::string::npos) << command << " lacks " << option;
+      const size_t help = r.out.find_first_not_of(' ', at + option.size());
+      EXPECT_EQ(r.out.compare(help, std::strlen(knob.off), knob.off), 0)
+          << command << " " << option << ": " << r.out.substr(help, r.out.find('\n', help) - help);
+    }
+    EXPECT_GE(switches, 5u);
+  }
 }
 
 TEST(Cli, VersionIsThePackages) {

@@ -161,6 +161,18 @@ def test_knobs_are_the_clis(cli):
         assert f"| `{knob['name']}` |" in done.stdout, knob["name"]
 
 
+def test_switches_say_what_off_does(cli):
+    """A switch's `off` is what the command line's --no-NAME help begins with."""
+    done = subprocess.run([str(cli), "validate", "--help"], capture_output=True, text=True, timeout=60, check=True)
+    for knob in rtcd.knobs():
+        if knob["type"] != "flag":
+            assert knob["off"] is None, knob["name"]
+            continue
+        option = "--no-" + knob["name"].replace("_", "-")
+        line = next(line for line in done.stdout.splitlines() if line.strip().startswith(option + " "))
+        assert line.strip()[len(option):].lstrip().startswith(knob["off"]), knob["name"]
+
+
 def test_help_names_every_knob():
     text = pydoc.render_doc(rtcd.NarrowPhase, renderer=pydoc.plaintext)
     for knob in rtcd.knobs():

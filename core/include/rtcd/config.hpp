@@ -116,6 +116,7 @@ struct Knob {
   const char* unset;    // the default, in words ("derived per pair", "on", "auto")
   const char* meaning;  // one line
   const char* cost;     // one line
+  const char* off;      // switches: what turning it off does, one line; nullptr for the others
   // Set by the scene's effects list instead of a narrow_phase key (the one
   // place that turns it on): predictive, projected.
   bool effect;

@@ -1,10 +1,10 @@
-#include "knobs.hpp"
+#include "rtcd/app/knobs.hpp"
 
-#include "inputs.hpp"
+#include "rtcd/app/inputs.hpp"
 #include "rtcd/config.hpp"
 #include "rtcd/results.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 
 std::string range(const Knob& k) {
@@ -58,4 +58,4 @@ void print_knobs(std::ostream& out) {
   for (const RayCounter& c : kRayCounters) out << "| `" << c.name << "` | " << c.meaning << " |\n";
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -1,5 +1,5 @@
-// Shape specs, poses and pose sequences from the command line.
-#include "inputs.hpp"
+// Knobs, shape specs, poses and pose sequences: a command's inputs.
+#include "rtcd/app/inputs.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -8,14 +8,13 @@
 #include <iostream>
 #include <sstream>
 
-#include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_check.hpp"
 #include "rtcd/validation/families.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 
 std::vector<double> parse_numbers(const std::string& text, const std::string& what) {
@@ -35,9 +34,15 @@ std::vector<double> parse_numbers(const std::string& text, const std::string& wh
   return out;
 }
 
-Pose pose_from(const std::vector<double>& v, const std::string& what) {
+Pose pose_of_numbers(const std::vector<double>& v, const std::string& what) {
   if (v.size() != 7)
     throw UsageError(what + ": expected 7 numbers (tx ty tz qw qx qy qz), got " + std::to_string(v.size()));
+  return pose_from(v.data(), what);
+}
+
+}  // namespace
+
+Pose pose_from(const double* v, const std::string& what) {
   Pose p;
   p.position = {v[0], v[1], v[2]};
   p.orientation = Eigen::Quaterniond(v[3], v[4], v[5], v[6]);
@@ -47,8 +52,6 @@ Pose pose_from(const std::vector<double>& v, const std::string& what) {
     throw UsageError(what + ": " + e.what());
   }
 }
-
-}  // namespace
 
 void Knobs::apply(Config& c) const {
   for (const auto& [knob, value] : set) knob->set(c, value);
@@ -64,29 +67,6 @@ std::string option_name(const Knob& knob) {
   std::string name = knob.name;
   std::replace(name.begin(), name.end(), '_', '-');
   return name;
-}
-
-void add_knobs(CLI::App& command, Knobs& k) {
-  for (const Knob& knob : knobs()) {
-    const std::string option = option_name(knob);
-    const std::string help = std::string(knob.meaning) + ". Cost: " + knob.cost;
-    switch (knob.type) {
-      case KnobType::flag:
-        command.add_flag_callback("--no-" + option, [&k, &knob] { k.set.push_back({&knob, false}); },
-                                  "Off: " + help + " (default: on)");
-        break;
-      case KnobType::count:
-      case KnobType::length:
-        // The range is Config::validate's to hold, with the knob's name.
-        command.add_option_function<double>(
-            "--" + option, [&k, &knob](double v) { k.set.push_back({&knob, v}); },
-            help + " " + to_string(KnobValue(knob.min)) + " .. " + to_string(KnobValue(knob.max)) + " (default: " +
-                knob.unset + ")");
-        break;
-      case KnobType::mode:
-        break;  // each command's own --mode
-    }
-  }
 }
 
 void warn_if_self_intersecting(const Shape& shape, const std::string& name) {
@@ -121,7 +101,7 @@ std::shared_ptr<const Shape> parse_shape(const std::string& spec, double samplin
 }
 
 Pose parse_pose(const std::string& text, const std::string& what) {
-  return pose_from(parse_numbers(text, what), what);
+  return pose_of_numbers(parse_numbers(text, what), what);
 }
 
 std::vector<SequenceStep> read_sequence(const std::string& path) {
@@ -149,11 +129,11 @@ std::vector<SequenceStep> read_sequence(const std::string& path) {
       }
       for (double x : v)
         if (!std::isfinite(x)) throw UsageError(where + ": " + key + " holds a non-finite number");
-      (std::string(key) == "pose_a" ? s.a : s.b) = pose_from(v, where + " " + key);
+      (std::string(key) == "pose_a" ? s.a : s.b) = pose_of_numbers(v, where + " " + key);
     }
     steps.push_back(s);
   }
   return steps;
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

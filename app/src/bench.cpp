@@ -1,17 +1,17 @@
 // `rtcd bench`: runs the experiments, then draws the plots
 // (scripts/plot_bench.py with Debian's python3-matplotlib).
-#include "bench.hpp"
+#include "rtcd/app/bench.hpp"
 
 #include <filesystem>
 #include <iostream>
 #include <memory>
 #include <thread>
 
-#include "console.hpp"
+#include "rtcd/app/console.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/experiments/bench.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 namespace fs = std::filesystem;
 
@@ -51,4 +51,4 @@ int run_bench(experiments::BenchOptions b, bool plots) {
   return 0;
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -9,7 +9,7 @@
 
 #include "rtcd/mesh_check.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 
 struct CheckOptions {
   std::vector<std::string> files;
@@ -22,4 +22,4 @@ int run_check(const CheckOptions& options);
 // One mesh's findings as `rtcd check --json` prints them.
 nlohmann::json to_json(const MeshCheck& check);
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

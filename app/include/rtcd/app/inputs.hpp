@@ -1,4 +1,4 @@
-// Reading the command line's inputs: shape specs, poses, pose sequences.
+// Reading a command's inputs: knobs, shape specs, poses, pose sequences.
 #pragma once
 
 #include <memory>
@@ -9,22 +9,15 @@
 #include "rtcd/geometry.hpp"
 #include "rtcd/shape.hpp"
 
-namespace CLI {
-class App;
-}
+namespace rtcd::app {
 
-namespace rtcd::cli {
-
-// The accuracy knobs every subcommand that runs the narrow phase takes,
-// one option per entry of rtcd::knobs() (the mode excepted: each command
-// has its own --mode): --NAME for numbers, --no-NAME for switches that
-// default on. Holds what the command line set, in order.
+// The accuracy knobs a command was given (the command line's --NAME and
+// --no-NAME options, Python's keyword arguments), in order.
 struct Knobs {
   std::vector<std::pair<const Knob*, KnobValue>> set;
   void apply(Config& config) const;  // sets what these knobs set, leaves the rest
   Config config() const;             // the default Config with these knobs set
 };
-void add_knobs(CLI::App& command, Knobs& knobs);
 // A knob's name as the command line spells it: distance-extension.
 std::string option_name(const Knob& knob);
 
@@ -36,6 +29,9 @@ std::shared_ptr<const Shape> parse_shape(const std::string& spec, double samplin
 // Prints the warning of self_intersection_warning() for a shape's mesh.
 void warn_if_self_intersecting(const Shape& shape, const std::string& name);
 
+// Seven numbers tx ty tz qw qx qy qz as a checked pose; UsageError naming
+// `what` when the quaternion is not a rotation.
+Pose pose_from(const double* v, const std::string& what);
 // "tx ty tz qw qx qy qz" (spaces or commas).
 Pose parse_pose(const std::string& text, const std::string& what);
 
@@ -45,4 +41,4 @@ struct SequenceStep {
 // A JSON array of {"pose_a": [7 numbers], "pose_b": [7 numbers]}.
 std::vector<SequenceStep> read_sequence(const std::string& path);
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -1,6 +1,6 @@
 // `rtcd run`: the main job. Steps a scene, streams steps.csv, then writes
 // summary.json, plots (Debian's python3-matplotlib) and snapshots.
-#include "run.hpp"
+#include "rtcd/app/run.hpp"
 
 #include <sys/resource.h>
 #include <unistd.h>
@@ -20,13 +20,13 @@
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
-#include "console.hpp"
+#include "rtcd/app/console.hpp"
 #include "rtcd/clock.hpp"
 #include "rtcd/knobs_json.hpp"
 #include "rtcd/sim/recording.hpp"
 #include "rtcd/sim/simulation.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 
 namespace fs = std::filesystem;
@@ -261,4 +261,4 @@ int run_scene(const RunOptions& o, fs::path* folder) {
   return 0;
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -5,9 +5,9 @@
 
 #include <string>
 
-#include "inputs.hpp"
+#include "rtcd/app/inputs.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 
 struct ReplayOptions {
   std::string recording;
@@ -22,4 +22,4 @@ struct ReplayOptions {
 // Prints the table; exit 0 done, 2 bad input.
 int run_replay(const ReplayOptions& options);
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -7,9 +7,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "inputs.hpp"
+#include "rtcd/app/inputs.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 
 struct ValidateOptions {
   std::string backend;  // empty: every usable backend
@@ -29,4 +29,4 @@ int run_validate(const ValidateOptions& options);
 // each summary as `rtcd validate --json` prints it.
 nlohmann::json validate_json(const ValidateOptions& options);
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -7,7 +7,7 @@
 
 #include "rtcd/results.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 
 // The result of the single pair of a `rtcd query` step.
 nlohmann::json to_json(const StepResult& step);
@@ -15,4 +15,4 @@ nlohmann::json to_json(const StepResult& step);
 nlohmann::json stats_json(const StepStats& stats);
 void print_table(std::ostream& out, const StepResult& step);
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-namespace rtcd::cli {
+namespace rtcd::app {
 
 struct RunOptions {
   std::string scene;  // empty: the default scene
@@ -24,4 +24,4 @@ struct RunOptions {
 // `folder`, when given, receives the output folder.
 int run_scene(const RunOptions& options, std::filesystem::path* folder = nullptr);
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -12,7 +12,7 @@
 
 #include "rtcd/clock.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 
 inline std::string machine() {
   std::ifstream cpu("/proc/cpuinfo");
@@ -59,4 +59,4 @@ class Progress {
   Clock::time_point start_;
 };
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -1,10 +1,10 @@
 // JSON and table output of a query step.
-#include "report.hpp"
+#include "rtcd/app/report.hpp"
 
 #include <cstdio>
 #include <string>
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 
 nlohmann::json vec(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
@@ -105,4 +105,4 @@ void print_table(std::ostream& out, const StepResult& step) {
   out << line;
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -4,8 +4,8 @@
 
 #include <ostream>
 
-namespace rtcd::cli {
+namespace rtcd::app {
 
 void print_knobs(std::ostream& out);
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -1,5 +1,5 @@
 // `rtcd check` (see check.hpp).
-#include "check.hpp"
+#include "rtcd/app/check.hpp"
 
 #include <algorithm>
 #include <iostream>
@@ -10,7 +10,7 @@
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_check.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 
 constexpr int kFit = 0, kDefect = 1, kUnreadable = 2;
@@ -101,4 +101,4 @@ int run_check(const CheckOptions& o) {
   return code;
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

@@ -1,17 +1,17 @@
 // `rtcd replay`: a recording through one configuration, summed per phase.
-#include "replay.hpp"
+#include "rtcd/app/replay.hpp"
 
 #include <algorithm>
 #include <cstdio>
 #include <string>
 
-#include "console.hpp"
+#include "rtcd/app/console.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/experiments/bench.hpp"
 #include "rtcd/experiments/replay.hpp"
 #include "rtcd/narrow_phase.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 
 // One phase's steps summed.
@@ -150,4 +150,4 @@ int run_replay(const ReplayOptions& o) {
   return 0;
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app

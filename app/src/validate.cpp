@@ -1,5 +1,5 @@
 // `rtcd validate` (see validate.hpp).
-#include "validate.hpp"
+#include "rtcd/app/validate.hpp"
 
 #include <cstdio>
 #include <fstream>
@@ -12,7 +12,7 @@
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/validation/sweep.hpp"
 
-namespace rtcd::cli {
+namespace rtcd::app {
 namespace {
 
 void print_row(const validation::Summary& s) {
@@ -115,4 +115,4 @@ int run_validate(const ValidateOptions& o) {
   return 0;
 }
 
-}  // namespace rtcd::cli
+}  // namespace rtcd::app
