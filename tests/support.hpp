@@ -64,6 +64,13 @@ inline std::vector<std::string> usable_backends() {
   return names;
 }
 
+// The usable backends but basic: those a test compares with basic.
+inline std::vector<std::string> backends_beside_basic() {
+  std::vector<std::string> names = usable_backends();
+  std::erase(names, "basic");
+  return names;
+}
+
 // A backend name as a test name: gtest takes letters, digits and '_' only.
 inline std::string test_name(std::string backend) {
   for (char& c : backend)

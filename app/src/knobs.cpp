@@ -52,9 +52,10 @@ void print_knobs(std::ostream& out) {
         << (k.effect ? "`\"" + std::string(k.name) + "\"` in `effects`" : "`narrow_phase." + std::string(k.name) + "`")
         << " |\n";
   out << "\n## Step statistics\n\n"
-         "Ray counters of `StepStats` (`rtcd query --json`, `stats`), summed over a step's pairs.\n\n"
+         "Counters of `StepStats` (`rtcd query --json`, `stats`), summed over a step's pairs.\n\n"
          "| counter | what it counts |\n"
          "|---|---|\n";
+  for (const StepCounter& c : kStepCounters) out << "| `" << c.name << "` | " << c.meaning << " |\n";
   for (const RayCounter& c : kRayCounters) out << "| `" << c.name << "` | " << c.meaning << " |\n";
 }
 

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <string>
 
+#include "device_share.hpp"
 #include "rtcd/app/console.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/experiments/bench.hpp"
@@ -64,24 +65,14 @@ void print_row(const Sum& s) {
 // Where the rays ran, for a device backend: each device's share, and the
 // first step that fell back to the CPU, with why.
 void print_devices(const experiments::ReplayRun& run) {
-  std::vector<size_t> rays;
-  const experiments::ReplayStep* fallback = nullptr;
-  uint64_t fallback_step = 0;
-  for (uint64_t k = 0; k < run.steps.size(); ++k) {
-    const experiments::ReplayStep& s = run.steps[k];
-    rays.resize(std::max(rays.size(), s.device_rays.size()));
-    for (size_t d = 0; d < s.device_rays.size(); ++d) rays[d] += s.device_rays[d];
-    if (!fallback && !s.cpu_fallback.empty()) {
-      fallback = &s;
-      fallback_step = k;
-    }
-  }
-  if (rays.empty() && !fallback) return;  // a CPU backend
+  DeviceShare share;
+  for (uint64_t k = 0; k < run.steps.size(); ++k) share.add(k, run.steps[k].device_rays, run.steps[k].cpu_fallback);
+  if (share.rays.empty() && !share.fallback_step) return;  // a CPU backend
   std::printf("\nRays by device:");
-  for (size_t d = 0; d < rays.size(); ++d) std::printf(" [%zu] %zu", d, rays[d]);
-  if (fallback) {
-    std::printf("; fell back to the CPU from step %llu: %s\n", static_cast<unsigned long long>(fallback_step),
-                fallback->cpu_fallback.c_str());
+  for (size_t d = 0; d < share.rays.size(); ++d) std::printf(" [%zu] %zu", d, share.rays[d]);
+  if (share.fallback_step) {
+    std::printf("; fell back to the CPU from step %llu: %s\n", static_cast<unsigned long long>(*share.fallback_step),
+                share.fallback_reason.c_str());
   } else {
     std::printf("; no step fell back to the CPU\n");
   }

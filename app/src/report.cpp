@@ -25,18 +25,14 @@ nlohmann::json stats_json(const StepStats& s) {
   for (int i = 0; i < kLineStatusCount; ++i) endings[line_status_name(i)] = s.walk_endings[i];
   nlohmann::json devices = nlohmann::json::array();
   for (const DeviceWork& d : s.devices) devices.push_back({{"jobs", d.jobs}, {"rays", d.rays}});
-  nlohmann::json j = {{"pairs_full", s.pairs_full},
-          {"pairs_iterative", s.pairs_iterative},
-          {"fallbacks_to_full", s.fallbacks_to_full},
-          {"walk_endings", endings},
-          {"bytes_to_device", s.bytes_to_device},
-          {"bytes_from_device", s.bytes_from_device},
+  nlohmann::json j = {{"walk_endings", endings},
           {"devices", devices},
           {"cpu_fallback", s.cpu_fallback.empty() ? nlohmann::json() : nlohmann::json(s.cpu_fallback)},
           {"seconds", {{"prepare", s.seconds_prepare},
                        {"full", s.seconds_full},
                        {"iterative", s.seconds_iterative},
                        {"gather", s.seconds_gather}}}};
+  for (const StepCounter& c : kStepCounters) j[c.name] = s.*c.field;
   for (const RayCounter& c : kRayCounters) j[c.name] = s.*c.field;
   return j;
 }

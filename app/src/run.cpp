@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <tbb/task_arena.h>
 
+#include "device_share.hpp"
 #include "rtcd/app/console.hpp"
 #include "rtcd/clock.hpp"
 #include "rtcd/knobs_json.hpp"
@@ -110,8 +111,7 @@ int run_scene(const RunOptions& o, fs::path* folder) {
     double pairs = 0, rays = 0, contacts = 0;
   } totals;
   double rss_at_1000 = -1;
-  std::vector<size_t> device_rays;  // summed over the steps
-  nlohmann::json cpu_fallback;      // the first step that fell back, and why; null: none did
+  DeviceShare devices;
   std::string failure;
   Progress progress(scene.steps);
   const auto start = Clock::now();
@@ -128,10 +128,7 @@ int run_scene(const RunOptions& o, fs::path* folder) {
       totals.pairs += double(r.pairs);
       totals.rays += double(r.rays.rays());
       totals.contacts += double(r.contacts);
-      device_rays.resize(std::max(device_rays.size(), r.device_rays.size()));
-      for (size_t d = 0; d < r.device_rays.size(); ++d) device_rays[d] += r.device_rays[d];
-      if (cpu_fallback.is_null() && !r.cpu_fallback.empty())
-        cpu_fallback = {{"step", r.step}, {"reason", r.cpu_fallback}};
+      devices.add(r.step, r.device_rays, r.cpu_fallback);
       if (snapshot_at.contains(i)) {
         const fs::path png = dir / ("snapshot_" + std::to_string(i) + ".png");
         sim::write_png(png.string(), simulation.snapshot(scene.snapshot_width, scene.snapshot_height, o.full_rays));
@@ -169,8 +166,11 @@ int run_scene(const RunOptions& o, fs::path* folder) {
         {"interpenetration_every", scene.interpenetration_every}}},
       {"backend", simulation.backend()},
       {"devices", simulation.devices()},
-      {"device_rays", device_rays},
-      {"cpu_fallback", cpu_fallback},
+      {"device_rays", devices.rays},
+      // The first step that fell back, and why; null: none did.
+      {"cpu_fallback", devices.fallback_step ? nlohmann::json{{"step", *devices.fallback_step},
+                                                               {"reason", devices.fallback_reason}}
+                                             : nlohmann::json()},
       {"threads", thread_count},
       {"build_type", RTCD_BUILD_TYPE},
       {"machine", {{"cpu", machine()}, {"cores", std::thread::hardware_concurrency()}}},

@@ -351,7 +351,10 @@ TEST_P(Conformance, BadCallsAreUsageErrors) {
 
 // Same penetrating vertices, same triangles, depths within 1e-5 relative as
 // the basic traversal, on concave pairs, in full and in iterative steps.
-TEST_P(Conformance, AgreesWithBasic) {
+// Every backend but basic itself.
+class ConformanceBesideBasic : public Conformance {};
+
+TEST_P(ConformanceBesideBasic, AgreesWithBasic) {
   auto blob_a = shape(gen::concave_blob(902, 1));
   auto blob_b = shape(gen::concave_blob(902, 2));
   std::mt19937 g(33);
@@ -493,6 +496,8 @@ TEST_P(Conformance, StatisticsAddUp) {
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, Conformance, ::testing::ValuesIn(usable_backends()),
+                         [](const auto& info) { return test_name(info.param); });
+INSTANTIATE_TEST_SUITE_P(Backends, ConformanceBesideBasic, ::testing::ValuesIn(backends_beside_basic()),
                          [](const auto& info) { return test_name(info.param); });
 
 TEST(Registry, UnknownBackendListsWhatIsAvailable) {

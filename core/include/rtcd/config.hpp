@@ -24,73 +24,21 @@ enum class Mode {
 const char* to_string(Mode mode);
 Mode parse_mode(const std::string& text);  // "full" | "iterative" | "auto"; ConfigError otherwise
 
+// Each field is a knob: its meaning, range, default and cost are in the knob
+// table (knobs(), core/src/config.cpp; docs/knobs.md), said once there.
 struct Config {
-  // The three limits below follow the scene unless set: left empty, each is
-  // derived per pair and step from the two shapes' sizes, thickness and
-  // triangle size and the pair's motion since the last step (rtcd/limits.hpp
-  // gives the rules). A value set here applies to every pair.
-
-  // Most triangles one walk visits before it gives up (Algorithm 1's max).
-  // Range [1, 1'000'000]. Derived: enough to cross four times the distance a
-  // walk may have to cover, at least 32. Cost: linear in the steps walks
-  // take; too low loses rays that moved across many triangles.
+  // Left empty, each limit is derived per pair and step from the two shapes'
+  // sizes, thickness and triangles and the pair's motion (docs/knobs.md
+  // gives the rules); a value set here applies to every pair.
   std::optional<uint32_t> max_walk_steps;
-
-  // Relative motion (equation 2.1, in length units) since a pair's last full
-  // step above which the pair is traced in full again. Range [0,
-  // distance_extension]. Derived: half the extension, at most a quarter of
-  // the thinner body's thickness.
-  // Cost: higher keeps pairs iterative longer (cheaper) but walks lose more
-  // rays on concave regions.
-  std::optional<double> displacement_threshold;
-
-  // How far outside the other body a vertex is still tracked by a predictive
-  // ray, and how much both bounding boxes grow before selecting candidate
-  // vertices. Range [0, 1e12], and >= displacement_threshold. Derived: a
-  // tenth of the smaller body's radius, or twice the pair's last motion if
-  // that is more (at most the radius). Cost: more candidate vertices and longer predictive rays.
+  std::optional<double> displacement_threshold;  // at most distance_extension
   std::optional<double> distance_extension;
 
-  // Cast predictive rays so vertices about to penetrate are tracked by the
-  // iterative walk (section 2.1.3). Default on. Cost: one short extra ray per
-  // non-penetrating candidate in full steps, one walk per tracked vertex after.
   bool predictive = true;
-
-  // After the walks say a vertex is inside, cast one ray toward the nearer
-  // of the two faces they found: a concave target can fold between them,
-  // and a vertex that moved out into such a gap would be reported at a
-  // stale depth. Default on; skipped against convex meshes. Cost: one ray
-  // no longer than that distance per walked contact beyond its face's
-  // clearance (fold.h), which most contacts lie within.
   bool verify_walks = true;
-
-  // Test each edge of the source against the target too: two surfaces can
-  // cross with no ray origin inside either (planks laid crosswise). An edge
-  // whose ends are outside but whose line enters the target gives an edge
-  // contact (Contact::edge). Default on. Cost: the edges near a pair's
-  // overlap (about three per candidate vertex of a closed mesh) each cast
-  // one ray as long as the edge, a second when the first enters the target
-  // and two more and a nearest-triangle query for a crossing; in walking
-  // modes the edges near the target are tested again every step.
-  bool edge_contacts = true;
-
-  // Measure each contact against the target's nearest surface: the ray
-  // proves a vertex is inside, and its depth, direction and face are those
-  // of the nearest point of the target's surface (the true penetration).
-  // Off: the thesis' ray contact, as deep as the ray runs to where it leaves
-  // the target (on a thin tube's side, across the tube and out of the far
-  // side of what it presses into). Default on. Cost: one nearest-triangle
-  // query per vertex contact, within its ray's exit distance.
-  bool nearest_surface = true;
-
-  // Ray contacts (nearest_surface off) push along the impacted triangle's
-  // normal by the projected depth (section 2.2) rather than along the ray by
-  // its depth: what Contact::push holds. A contact measured to the nearest
-  // surface pushes along its way out, that surface's normal. Default on.
-  // Cost: none here; it changes what the solver receives.
-  bool projected = true;
-
-  // Full, iterative or automatic (default).
+  bool edge_contacts = true;     // Contact::edge, ContactKind::edge
+  bool nearest_surface = true;   // off: the thesis' ray contact
+  bool projected = true;         // what Contact::push holds for ray contacts
   Mode mode = Mode::automatic;
 
   // Throws ConfigError naming the knob and its allowed range (knobs()),

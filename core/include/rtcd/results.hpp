@@ -155,10 +155,11 @@ struct DeviceWork {
   size_t rays = 0;  // candidate rays it traced or walked
 };
 
+// The step's counters beside the ray counters: kStepCounters says what each counts.
 struct StepStats : RayCounts {
   size_t pairs_full = 0, pairs_iterative = 0;
-  size_t fallbacks_to_full = 0;                               // pairs with state sent back to full by equation 2.1
-  size_t bytes_to_device = 0, bytes_from_device = 0;          // host <-> device traffic (0 on the CPU)
+  size_t fallbacks_to_full = 0;
+  size_t bytes_to_device = 0, bytes_from_device = 0;
   // Where the rays ran: one entry per device of a device backend, in its
   // order (empty on the CPU backends); rays the CPU ran in a device's stead
   // are in no entry.
@@ -171,6 +172,22 @@ struct StepStats : RayCounts {
   // Zeroes every figure, keeping the buffer of `devices`: a steady step
   // allocates nothing.
   void reset();
+};
+
+// The pair and traffic counters of StepStats: the JSON and docs/knobs.md
+// read this table, as they read kRayCounters.
+struct StepCounter {
+  const char* name;
+  size_t StepStats::*field;
+  const char* meaning;
+};
+inline constexpr StepCounter kStepCounters[] = {
+    {"pairs_full", &StepStats::pairs_full, "pairs traced in full: new, sent back by equation 2.1, or every pair in full mode"},
+    {"pairs_iterative", &StepStats::pairs_iterative, "pairs walked from their tracked rays"},
+    {"fallbacks_to_full", &StepStats::fallbacks_to_full,
+     "pairs with state that equation 2.1 sent back to full tracing (automatic mode)"},
+    {"bytes_to_device", &StepStats::bytes_to_device, "bytes copied from the host to the devices (0 on the CPU)"},
+    {"bytes_from_device", &StepStats::bytes_from_device, "bytes copied from the devices to the host (0 on the CPU)"},
 };
 
 struct StepResult {
