@@ -38,7 +38,11 @@ TEST_P(Edges, PlanksLaidCrosswise) {
     Config config;
     config.mode = mode;
     auto r = rig(bar_mesh(0.5, 0.05, 0.05), bar_mesh(0.05, 0.5, 0.05), config);
+    // A first step 7.5 mm deep, then B sinks to 1 cm: judged on the second,
+    // which walks in the walking modes.
+    ASSERT_TRUE(r.step(Pose{}, at(0, 0, 0.0925)).pairs[0].colliding);
     const StepResult res = r.step(Pose{}, at(0, 0, 0.09));
+    EXPECT_EQ(res.pairs[0].mode, mode == Mode::full ? PairMode::full : PairMode::iterative);
     ASSERT_TRUE(res.pairs[0].colliding);
     EXPECT_NEAR(res.pairs[0].max_depth, 0.01, 1e-6);
     EXPECT_EQ(count(res, ContactKind::vertex), 0u) << "no vertex is inside";

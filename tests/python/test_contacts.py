@@ -12,6 +12,7 @@ import rtcd
 from conftest import IDENTITY, pose, rotation_matrix, transform
 
 VERTEX, EDGE, SPHERE = 0, 1, 2
+FULL, ITERATIVE = 0, 1  # PairResult.mode
 # The limits the hand-computed cube case was worked out for, and the thesis'
 # ray contacts it measures (depth along each corner's diagonal).
 CUBE_KNOBS = dict(distance_extension=0.1, displacement_threshold=0.05, max_walk_steps=32, nearest_surface=False)
@@ -131,7 +132,15 @@ def test_bars_laid_crosswise(mode: str):
     a = rtcd.gen.box([0.5, 0.05, 0.05])
     b = rtcd.gen.box([0.05, 0.5, 0.05])
     at = [0, 0, 0.09, 1, 0, 0, 0]
-    r = rtcd.query(a, b, IDENTITY, at, backend="embree", mode=mode)
+    # A first step 7.5 mm deep, then B sinks to 1 cm: judged on the second,
+    # which walks in the walking modes.
+    narrow = rtcd.NarrowPhase("embree", mode=mode)
+    body_a = narrow.add_body(narrow.add_shape(a), IDENTITY)
+    body_b = narrow.add_body(narrow.add_shape(b), [0, 0, 0.0925, 1, 0, 0, 0])
+    assert bool(narrow.detect([[body_a, body_b]]).pairs.colliding[0])
+    narrow.set_pose(body_b, at)
+    r = narrow.detect([[body_a, body_b]])
+    assert r.pairs.mode[0] == (FULL if mode == "full" else ITERATIVE)
     c = r.contacts
     assert bool(r.pairs.colliding[0])
     assert r.pairs.max_depth[0] == pytest.approx(0.01, abs=1e-6)

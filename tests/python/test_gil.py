@@ -1,6 +1,7 @@
-"""The GIL released while a step runs: a step and Python code on another
-thread overlap in time. It measures the wall time, so ctest runs it alone
-(RUN_SERIAL): other tests on the same cores would take the time it counts."""
+"""The GIL released while a step runs: Python code on another thread keeps
+running while a step is in C++. Judged by the CPU time that thread gets
+while the steps run, not by the wall clock, so other work on the machine
+slows both sides and leaves the verdict alone."""
 from __future__ import annotations
 
 import sys
@@ -11,49 +12,25 @@ from conftest import resting_rig
 
 
 def test_detect_releases_the_gil(blobs, resting_x):
-    """A step on one core while a pure-Python loop counts on the other. The
-    loop needs the GIL: held through detect(), the loop's time and the
-    steps' time could not overlap and would add up to the wall time at
-    most; released, they overlap (on two cores, nearly the whole time).
-    Overlap, not speed-up, is what is shown."""
+    """Steps repeated for half a second on one thread while a pure-Python
+    loop spins on another. The loop needs the GIL: held through detect(),
+    the loop runs only between steps (a few microseconds of Python each)
+    and gets a small share of the steps' time in CPU; released, it runs
+    beside them and gets most of it (less only where other processes take
+    the cores)."""
     narrow, pairs = resting_rig(blobs, resting_x, mode="full", copies=64, threads=1)
     narrow.detect(pairs)  # warm up: trees built
 
-    def step_seconds(calls=5):
-        times = []
-        for _ in range(calls):
-            start = time.perf_counter()
-            narrow.detect(pairs)
-            times.append(time.perf_counter() - start)
-        return sorted(times)[calls // 2]
-
-    counter = [0]
-
-    def count_until(flag: threading.Event):
-        while not flag.is_set():
-            counter[0] += 1
-
-    def counted_seconds(seconds):
-        """The loop's pace alone: counts per second over `seconds`."""
-        counter[0] = 0
-        alone = threading.Event()
-        timer = threading.Timer(seconds, alone.set)
-        start = time.perf_counter()
-        timer.start()
-        count_until(alone)
-        timer.join()
-        return counter[0] / (time.perf_counter() - start)
-
-    solo_rate = max(counted_seconds(0.05) for _ in range(3))
-    step = step_seconds()
-
+    inside = [0.0]
     calls = [0]
     stop = threading.Event()
 
     def detect_repeatedly():
         deadline = time.perf_counter() + 0.5
         while time.perf_counter() < deadline:
+            start = time.perf_counter()
             narrow.detect(pairs)
+            inside[0] += time.perf_counter() - start
             calls[0] += 1
         stop.set()
 
@@ -61,17 +38,17 @@ def test_detect_releases_the_gil(blobs, resting_x):
     old = sys.getswitchinterval()
     sys.setswitchinterval(1e-4)
     try:
-        counter[0] = 0
-        start = time.perf_counter()
         worker = threading.Thread(target=detect_repeatedly)
+        begin = time.thread_time()
         worker.start()
-        count_until(stop)
+        while not stop.is_set():
+            pass
+        loop_cpu = time.thread_time() - begin
         worker.join()
-        wall = time.perf_counter() - start
     finally:
         sys.setswitchinterval(old)
 
-    assert calls[0] >= 3, "each call should take a few ms"
-    busy = (counter[0] / solo_rate + calls[0] * step) / wall
-    # About 1 at most with the GIL held through the steps; near 2 released.
-    assert busy > 1.4, f"the loop and the steps did not overlap: {busy:.2f} of the wall time busy"
+    assert calls[0] >= 3 and inside[0] / calls[0] > 1e-3, "each call should take a few ms"
+    share = loop_cpu / inside[0]
+    # Near 1 on an idle machine when released; a few percent when held.
+    assert share > 0.3, f"the loop got {share:.2f} of the steps' time in CPU: the GIL was held through them"
