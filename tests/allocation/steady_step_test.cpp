@@ -171,9 +171,13 @@ TEST_P(SteadyStep, AllocatesNothing) {
   const Allocations made = allocations_in_steady_steps(s, 4, 10, contacts);
   EXPECT_EQ(made.cxx, 0u) << "C++ allocations in 10 steady steps";
   if (backend.starts_with("opencl")) {
-    // The OpenCL runtime's own, reported: not ours to remove.
+    // The OpenCL runtime's own, reported: not ours to remove. Bounded by
+    // the commands a step enqueues, not by its pairs or rays: PoCL makes
+    // about 110 a step for one pair and for 64 alike (two batches: about
+    // 210); one allocation per pair or per ray would pass the ceiling.
     RecordProperty("runtime_mallocs_per_step", std::to_string(made.heap / 10));
     std::cout << "OpenCL runtime: " << made.heap / 10 << " heap allocations a step\n";
+    EXPECT_LE(made.heap / 10, 300u) << "the OpenCL runtime's allocations a step";
   } else {
     EXPECT_EQ(made.heap, 0u) << "heap allocations in 10 steady steps";
   }

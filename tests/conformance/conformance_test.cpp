@@ -9,6 +9,7 @@
 #include "rtcd/backend.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
+#include "same_steps.hpp"
 #include "support.hpp"
 
 namespace rtcd::test {
@@ -395,12 +396,8 @@ TEST_P(Conformance, SameContactsBitForBitAcrossThreadCounts) {
     tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
     one = run();
   }
-  ASSERT_EQ(many.contacts.size(), one.contacts.size());
   ASSERT_GT(many.contacts.size(), 0u);
-  for (size_t k = 0; k < many.contacts.size(); ++k) {
-    EXPECT_EQ(many.contacts[k].vertex, one.contacts[k].vertex);
-    EXPECT_EQ(many.contacts[k].depth, one.contacts[k].depth);
-  }
+  expect_same_step(many, one, "all threads against one");
 }
 
 // A step of many pairs gives each pair what a step of that pair alone

@@ -271,9 +271,16 @@ TEST_P(EdgesBesideBasic, AgreesWithBasic) {
   }
   ASSERT_EQ(x.contacts.size(), y.contacts.size());
   for (size_t k = 0; k < x.contacts.size(); ++k) {
-    EXPECT_EQ(x.contacts[k].kind, y.contacts[k].kind);
-    EXPECT_EQ(x.contacts[k].edge, y.contacts[k].edge);
-    EXPECT_NEAR(x.contacts[k].depth, y.contacts[k].depth, 1e-5);
+    const Contact &c = x.contacts[k], &d = y.contacts[k];
+    EXPECT_EQ(c.kind, d.kind);
+    EXPECT_EQ(c.source, d.source);
+    EXPECT_EQ(c.vertex, d.vertex);
+    EXPECT_EQ(c.edge, d.edge);
+    EXPECT_EQ(c.triangle, d.triangle) << "edge " << c.edge[0] << "-" << c.edge[1];
+    EXPECT_NEAR(c.depth, d.depth, 1e-5);
+    EXPECT_NEAR((c.origin - d.origin).norm(), 0.0, 1e-5);
+    EXPECT_NEAR((c.push - d.push).norm(), 0.0, 1e-5);
+    EXPECT_NEAR((c.normal - d.normal).norm(), 0.0, 1e-5);
   }
 }
 

@@ -1,6 +1,6 @@
-// A host that finds rtcd with find_package, includes every installed
-// header and nothing else, picks a backend without a string, and detects
-// one contact.
+// A host that finds rtcd with find_package, includes the core's installed
+// headers and nothing else, picks a backend without a string, and detects
+// one contact (every installed header is compiled apart: run.cmake).
 #include <cstdio>
 
 #include <rtcd/backend.hpp>
