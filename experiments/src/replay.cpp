@@ -20,6 +20,22 @@
 namespace rtcd::experiments {
 namespace {
 
+uint64_t digest(std::span<const Contact> contacts) {
+  uint64_t h = 14695981039346656037ull;
+  auto mix = [&h](uint64_t v) {
+    for (int byte = 0; byte < 8; ++byte, v >>= 8) h = (h ^ (v & 0xff)) * 1099511628211ull;
+  };
+  for (const Contact& c : contacts) {
+    mix(c.source_body);
+    mix(c.target_body);
+    mix(uint64_t(c.kind));
+    mix(c.edge[0]);
+    mix(c.edge[1]);
+    mix(uint64_t(int64_t(c.triangle)));
+  }
+  return h;
+}
+
 // The shape of every kind, the ground's last.
 struct Shapes {
   std::vector<std::shared_ptr<const Shape>> of_kind;
@@ -73,6 +89,7 @@ class OursRunner final : public Runner {
     out.contacts = result_.contacts.size();
     for (const PairResult& p : result_.pairs) out.colliding += p.colliding;
     for (const Contact& c : result_.contacts) out.depth_sum += c.depth;
+    out.contact_digest = digest(result_.contacts);
   }
   const StepResult* result() const override { return &result_; }
 

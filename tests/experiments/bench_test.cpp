@@ -184,6 +184,7 @@ TEST(Replay, EveryEngineSeesTheSameStepsAndTheTracersAgree) {
     ASSERT_TRUE(basic.ran && embree.ran && runs[2].steps[s].ran);
     EXPECT_EQ(basic.pairs, r.steps()[s].pairs);
     EXPECT_EQ(basic.contacts, embree.contacts) << "step " << s;
+    EXPECT_EQ(basic.contact_digest, embree.contact_digest) << "the same contacts (bodies, kind, item, face), step " << s;
     EXPECT_NEAR(basic.depth_sum, embree.depth_sum, 1e-4 * (1 + basic.depth_sum));
     EXPECT_EQ(runs[3].steps[s].ran, s % 5 == 0);
     EXPECT_EQ(runs[4].steps[s].ran, s % 5 == 0);

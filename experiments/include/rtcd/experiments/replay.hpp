@@ -52,6 +52,9 @@ struct ReplayStep {
   size_t fallbacks = 0;  // of pairs_full, those equation 2.1 sent back (the rest are new)
   RayCounts counts;       // ours: the step's rays by what they did (kRayCounters)
   double depth_sum = 0;  // summed depth of every contact as the engine reports it
+  // Ours: a digest of every contact's bodies, kind, vertex or edge and face,
+  // in order (FNV-1a): equal digests, the same contacts.
+  uint64_t contact_digest = 0;
   size_t bytes_to_device = 0, bytes_from_device = 0;  // ours on OpenCL: the step's host <-> device traffic
   std::vector<size_t> device_rays;  // ours on OpenCL: the rays each device ran (StepStats::devices)
   std::string cpu_fallback;         // ours on OpenCL: why the step ran on the CPU instead; empty: it did not
