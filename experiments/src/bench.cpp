@@ -169,6 +169,28 @@ double mean_of(const std::vector<double>& v) {
   return v.empty() ? NAN : std::accumulate(v.begin(), v.end(), 0.0) / double(v.size());
 }
 
+// A figure over seeds: the mean, and min – max.
+std::string spread(const std::vector<double>& v) {
+  if (v.empty()) return std::string("blew up");
+  const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  return fixed(mean_of(v), 4) + " (" + fixed(*lo, 4) + " – " + fixed(*hi, 4) + ")";
+}
+
+std::string decrease(const std::vector<double>& without, const std::vector<double>& with) {
+  return percent(1 - mean_of(with) / mean_of(without));
+}
+
+// The automatic mode's threshold scaled for the accuracy/time curve, where
+// it stays within the distance extension.
+std::vector<double> swept_thresholds(const Config& base) {
+  std::vector<double> thresholds;
+  if (base.displacement_threshold)  // a derived threshold differs per pair: nothing to scale
+    for (double t : {0.25, 0.5, 2.0})
+      if (t * *base.displacement_threshold <= base.distance_extension.value_or(HUGE_VAL))
+        thresholds.push_back(t * *base.displacement_threshold);
+  return thresholds;
+}
+
 }  // namespace
 
 std::string Phases::rule() const {
@@ -287,6 +309,7 @@ class Bench {
   void record();
   // 2. The replays, in lockstep.
   void replay_configurations();
+  ReplayConfig our_config(std::string label, std::string backend, Mode mode, int threads, double threshold = -1) const;
   // 3. The same scene with Bullet's GIMPACT as the narrow phase (Figure 2.12).
   void host_gimpact();
   // 4. Simulations for the interpenetration tables and the accuracy curve.
@@ -297,9 +320,20 @@ class Bench {
   void peak_step(std::ostream& report) const;  // on every core: where the time goes
   void figure_2_12(std::ostream& report) const;
   void figures_2_13_and_2_14(std::ostream& report) const;
+  void write_replay_steps() const;
+  void write_host_steps() const;
   void peers(std::ostream& report) const;  // on the sampled steps
-  void interpenetration_tables(std::ostream& report) const;  // Tables 2.3 and 2.4
+  void interpenetration_tables(std::ostream& report) const;  // Tables 2.3 and 2.4, and the same runs' other figures
+  void write_simulations() const;
+  void table_2_3(std::ostream& report) const;
+  void table_2_4(std::ostream& report) const;
+  void projected_interpenetration(std::ostream& report) const;
+  void true_penetration(std::ostream& report) const;
   void accuracy_curve(std::ostream& report) const;
+  // A variant's figure over its seeds that did not blow up: the summed ray
+  // depth (the thesis'), or another the interpenetration pass measured.
+  std::vector<double> over_seeds(const std::string& label,
+                                 double SimOutcome::*figure = &SimOutcome::interpenetration) const;
 
   std::function<void(uint64_t, uint64_t)> progress(const std::string& stage) const {
     return [this, stage](uint64_t done, uint64_t total) {
@@ -372,38 +406,20 @@ void Bench::replay_configurations() {
   peers_every = o.peers_every ? o.peers_every : std::max<uint64_t>(1, steps / 60);
   judge_every = o.judge_every ? o.judge_every : std::max<uint64_t>(1, steps / 20);
   base = scene.narrow;
-  const auto ours = [&](std::string label, std::string backend, Mode mode, int threads, double threshold = -1) {
-    ReplayConfig c;
-    c.label = std::move(label);
-    c.backend = std::move(backend);
-    c.config = base;
-    c.config.mode = mode;
-    if (threshold >= 0) c.config.displacement_threshold = threshold;
-    c.threads = threads;
-    // Brute force in full mode is sampled: it costs rays x triangles a step.
-    const bool brute_force = backend == "basic" || backend == "opencl-basic";
-    c.every = mode == Mode::full && brute_force ? full_every : 1;
-    c.budget_seconds = o.budget_seconds;
-    return c;
-  };
   // Full and automatic on every usable backend; the knobs on Embree, the reference.
   for (const BackendInfo& b : available_backends())
     if (b.usable) tracers.push_back(b.name);
   for (const std::string& t : tracers) {
-    configs.push_back(ours("full " + t, t, Mode::full, 1));
-    configs.push_back(ours("auto " + t, t, Mode::automatic, 1));
+    configs.push_back(our_config("full " + t, t, Mode::full, 1));
+    configs.push_back(our_config("auto " + t, t, Mode::automatic, 1));
   }
-  configs.push_back(ours("iterative embree", "embree", Mode::iterative, 1));
+  configs.push_back(our_config("iterative embree", "embree", Mode::iterative, 1));
   // The accuracy/time curve: the automatic mode's threshold swept.
-  std::vector<double> thresholds;
-  if (base.displacement_threshold)  // a derived threshold differs per pair: nothing to scale
-    for (double t : {0.25, 0.5, 2.0})
-      if (t * *base.displacement_threshold <= base.distance_extension.value_or(HUGE_VAL))
-        thresholds.push_back(t * *base.displacement_threshold);
-  for (double t : thresholds) configs.push_back(ours("auto embree, threshold " + fixed(t, 3), "embree", Mode::automatic, 1, t));
+  for (double t : swept_thresholds(base))
+    configs.push_back(our_config("auto embree, threshold " + fixed(t, 3), "embree", Mode::automatic, 1, t));
   if (cores > 1) {
-    configs.push_back(ours("full embree, " + n_threads, "embree", Mode::full, cores));
-    configs.push_back(ours("auto embree, " + n_threads, "embree", Mode::automatic, cores));
+    configs.push_back(our_config("full embree, " + n_threads, "embree", Mode::full, cores));
+    configs.push_back(our_config("auto embree, " + n_threads, "embree", Mode::automatic, cores));
   }
   for (Engine e : {Engine::gimpact, Engine::fcl}) {
     ReplayConfig c;
@@ -417,6 +433,21 @@ void Bench::replay_configurations() {
   ro.judge_every = judge_every;
   ro.progress = progress("replay");
   runs = replay(recording, configs, ro);
+}
+
+ReplayConfig Bench::our_config(std::string label, std::string backend, Mode mode, int threads, double threshold) const {
+  ReplayConfig c;
+  c.label = std::move(label);
+  c.backend = std::move(backend);
+  c.config = base;
+  c.config.mode = mode;
+  if (threshold >= 0) c.config.displacement_threshold = threshold;
+  c.threads = threads;
+  // Brute force in full mode is sampled: it costs rays x triangles a step.
+  const bool brute_force = backend == "basic" || backend == "opencl-basic";
+  c.every = mode == Mode::full && brute_force ? full_every : 1;
+  c.budget_seconds = o.budget_seconds;
+  return c;
 }
 
 void Bench::host_gimpact() {
@@ -609,35 +640,8 @@ void Bench::figure_2_12(std::ostream& report) const {
 
 // Figure 2.13 / 2.14 data.
 void Bench::figures_2_13_and_2_14(std::ostream& report) const {
-  std::ofstream csv(dir / "replay_steps.csv");
-  csv << std::setprecision(9)
-      << "config,engine,threads,step,time,bodies,pairs,phase,seconds,seconds_rays,seconds_prepare,seconds_full,"
-         "seconds_iterative,seconds_gather,pairs_full,pairs_iterative,rays,colliding,contacts,depth_sum,judged,deep,"
-         "missed,false_rays,bytes_to_device,bytes_from_device\n";
-  for (const ReplayRun& r : runs)
-    for (uint64_t i = 0; i < r.steps.size(); ++i) {
-      const ReplayStep& s = r.steps[i];
-      if (!s.ran) continue;
-      const sim::RecordedStep& rec = recording.steps()[i];
-      csv << '"' << r.config.label << "\"," << r.engine_name << ',' << r.config.threads << ',' << i << ',' << rec.time
-          << ',' << rec.bodies << ',' << s.pairs << ',' << phases.of(i) << ',' << s.seconds << ',' << s.seconds_rays()
-          << ',' << s.seconds_prepare << ',' << s.seconds_full << ',' << s.seconds_iterative << ','
-          << s.seconds_gather << ',' << s.pairs_full << ',' << s.pairs_iterative << ',' << s.counts.rays() << ','
-          << s.colliding << ',' << s.contacts << ',' << s.depth_sum << ',' << s.judged << ',' << s.deep << ','
-          << s.missed << ',' << s.false_rays << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
-    }
-  std::ofstream host(dir / "host_steps.csv");
-  host << std::setprecision(9) << "host,step,bodies,pairs,contacts,seconds_broad,seconds_narrow,seconds_solver,"
-                                  "seconds_effects,seconds_total\n";
-  for (uint64_t i = 0; i < host_steps; ++i) {
-    const sim::RecordedStep& r = recording.steps()[i];
-    host << "rtcd," << i << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad << ','
-         << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total << '\n';
-  }
-  for (const sim::StepRecord& r : gimpact_host)
-    host << "GIMPACT," << r.step << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad
-         << ',' << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total
-         << '\n';
+  write_replay_steps();
+  write_host_steps();
   report << "## Figure 2.13: ray time per step, every configuration\n\n![Figure 2.13](figure_2_13.png)\n\n";
   // The end of the run (its last tenth): the speedups of Figure 2.14.
   // The last tenth of the steps both configurations of a tracer ran.
@@ -664,6 +668,43 @@ void Bench::figures_2_13_and_2_14(std::ostream& report) const {
     report << "![Figure 2.14](figure_2_14.png)\n\n";
   t.markdown(report);
   t.csv(dir / "figure_2_14_speedups.csv");
+}
+
+// Every replayed step of every configuration, for Figures 2.13 and 2.14.
+void Bench::write_replay_steps() const {
+  std::ofstream csv(dir / "replay_steps.csv");
+  csv << std::setprecision(9)
+      << "config,engine,threads,step,time,bodies,pairs,phase,seconds,seconds_rays,seconds_prepare,seconds_full,"
+         "seconds_iterative,seconds_gather,pairs_full,pairs_iterative,rays,colliding,contacts,depth_sum,judged,deep,"
+         "missed,false_rays,bytes_to_device,bytes_from_device\n";
+  for (const ReplayRun& r : runs)
+    for (uint64_t i = 0; i < r.steps.size(); ++i) {
+      const ReplayStep& s = r.steps[i];
+      if (!s.ran) continue;
+      const sim::RecordedStep& rec = recording.steps()[i];
+      csv << '"' << r.config.label << "\"," << r.engine_name << ',' << r.config.threads << ',' << i << ',' << rec.time
+          << ',' << rec.bodies << ',' << s.pairs << ',' << phases.of(i) << ',' << s.seconds << ',' << s.seconds_rays()
+          << ',' << s.seconds_prepare << ',' << s.seconds_full << ',' << s.seconds_iterative << ','
+          << s.seconds_gather << ',' << s.pairs_full << ',' << s.pairs_iterative << ',' << s.counts.rays() << ','
+          << s.colliding << ',' << s.contacts << ',' << s.depth_sum << ',' << s.judged << ',' << s.deep << ','
+          << s.missed << ',' << s.false_rays << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
+    }
+}
+
+// The host's stages per step, rtcd's and GIMPACT's, for Figure 2.12.
+void Bench::write_host_steps() const {
+  std::ofstream host(dir / "host_steps.csv");
+  host << std::setprecision(9) << "host,step,bodies,pairs,contacts,seconds_broad,seconds_narrow,seconds_solver,"
+                                  "seconds_effects,seconds_total\n";
+  for (uint64_t i = 0; i < host_steps; ++i) {
+    const sim::RecordedStep& r = recording.steps()[i];
+    host << "rtcd," << i << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad << ','
+         << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total << '\n';
+  }
+  for (const sim::StepRecord& r : gimpact_host)
+    host << "GIMPACT," << r.step << ',' << r.bodies << ',' << r.pairs << ',' << r.contacts << ',' << r.seconds_broad
+         << ',' << r.seconds_narrow << ',' << r.seconds_solver << ',' << r.seconds_effects << ',' << r.seconds_total
+         << '\n';
 }
 
 void Bench::peers(std::ostream& report) const {
@@ -704,6 +745,15 @@ void Bench::peers(std::ostream& report) const {
 }
 
 void Bench::interpenetration_tables(std::ostream& report) const {
+  write_simulations();
+  table_2_3(report);
+  table_2_4(report);
+  projected_interpenetration(report);
+  true_penetration(report);
+}
+
+// Every simulation's outcome, a row per variant and seed.
+void Bench::write_simulations() const {
   std::ofstream csv(dir / "simulations.csv");
   csv << std::setprecision(9)
       << "table,variant,seed,interpenetration,projected_interpenetration,deepest,true_penetration,deepest_true,"
@@ -713,25 +763,18 @@ void Bench::interpenetration_tables(std::ostream& report) const {
         << ',' << oc.result.projected << ',' << oc.result.deepest << ',' << oc.result.true_penetration << ','
         << oc.result.deepest_true << ',' << oc.result.seconds << ',' << oc.result.narrow_seconds << ",\""
         << oc.result.error << "\"\n";
-  // A variant's figure over its seeds: the summed ray depth (the thesis'),
-  // or the summed projected depth (what the solver is asked to undo).
-  const auto summary = [&](const std::string& label, double SimOutcome::*figure = &SimOutcome::interpenetration) {
-    std::vector<double> v;
-    for (const Outcome& oc : outcomes)
-      if (oc.variant->label == label && oc.result.error.empty()) v.push_back(oc.result.*figure);
-    return v;
-  };
-  const auto spread = [&](const std::vector<double>& v) {
-    if (v.empty()) return std::string("blew up");
-    const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
-    return fixed(mean_of(v), 4) + " (" + fixed(*lo, 4) + " – " + fixed(*hi, 4) + ")";
-  };
-  const auto decrease = [&](const std::vector<double>& without, const std::vector<double>& with) {
-    return percent(1 - mean_of(with) / mean_of(without));
-  };
-  const auto nop = summary("no predictive rays"), p = summary("predictive rays"),
-             ps = summary("predictive rays + speculative contacts"), std_c = summary("standard constraints"),
-             proj = summary("projected constraints");
+}
+
+std::vector<double> Bench::over_seeds(const std::string& label, double SimOutcome::*figure) const {
+  std::vector<double> v;
+  for (const Outcome& oc : outcomes)
+    if (oc.variant->label == label && oc.result.error.empty()) v.push_back(oc.result.*figure);
+  return v;
+}
+
+void Bench::table_2_3(std::ostream& report) const {
+  const auto nop = over_seeds("no predictive rays"), p = over_seeds("predictive rays"),
+             ps = over_seeds("predictive rays + speculative contacts");
   report << "## Table 2.3: cumulative interpenetration at the end, with and without predictive rays\n\n"
             "Simulations (the contacts feed back), "
          << o.seeds << " seeds each (mean, and min – max): the summed depth of every penetrating ray of every "
@@ -742,6 +785,10 @@ void Bench::interpenetration_tables(std::ostream& report) const {
   t3.rows.push_back({scene.name, spread(nop), spread(p), decrease(nop, p), spread(ps), decrease(nop, ps)});
   t3.markdown(report);
   t3.csv(dir / "table_2_3.csv");
+}
+
+void Bench::table_2_4(std::ostream& report) const {
+  const auto std_c = over_seeds("standard constraints"), proj = over_seeds("projected constraints");
   report << "## Table 2.4: standard against projected constraints\n\n"
          << "Both with predictive rays; first as the scene runs, then as the thesis measured it.\n\n";
   Table t4;
@@ -749,26 +796,33 @@ void Bench::interpenetration_tables(std::ostream& report) const {
   t4.rows.push_back({scene.name + " (" + (speculative ? "speculative contacts, " : "") +
                          std::to_string(scene.points_per_pair) + " points per pair)",
                      spread(std_c), spread(proj), decrease(std_c, proj)});
-  const auto thesis_std = summary("standard constraints, as the thesis ran"),
-             thesis_proj = summary("projected constraints, as the thesis ran");
+  const auto thesis_std = over_seeds("standard constraints, as the thesis ran"),
+             thesis_proj = over_seeds("projected constraints, as the thesis ran");
   t4.rows.push_back({scene.name + " as the thesis ran (no speculative contacts, " +
                          std::to_string(kThesisPointsPerPair) + " points per pair)",
                      spread(thesis_std), spread(thesis_proj), decrease(thesis_std, thesis_proj)});
   t4.markdown(report);
   t4.csv(dir / "table_2_4.csv");
+}
+
+// The summed projected depth: what the solver is asked to undo.
+void Bench::projected_interpenetration(std::ostream& report) const {
   report << "The same simulations in summed projected depth (depth times the cosine between ray and normal), "
             "beside the summed ray depth above: a grazing ray is long but asks the solver for little.\n\n";
   Table tp;
   tp.header = {"", "no predictive rays", "predictive rays", "predictive + speculative contacts",
                "standard constraints", "projected constraints", "standard (as the thesis ran)",
                "projected (as the thesis ran)"};
-  const auto projected = [&](const std::string& label) { return spread(summary(label, &SimOutcome::projected)); };
+  const auto projected = [&](const std::string& label) { return spread(over_seeds(label, &SimOutcome::projected)); };
   tp.rows.push_back({scene.name, projected("no predictive rays"), projected("predictive rays"),
                      projected("predictive rays + speculative contacts"), projected("standard constraints"),
                      projected("projected constraints"), projected("standard constraints, as the thesis ran"),
                      projected("projected constraints, as the thesis ran")});
   tp.markdown(report);
   tp.csv(dir / "projected_interpenetration.csv");
+}
+
+void Bench::true_penetration(std::ostream& report) const {
   report << "## True penetration at the end\n\n"
             "The same passes' contacts measured to the target's nearest surface (Config::nearest_surface): the "
             "summed and the deepest true penetration, whatever contacts the simulation ran with; the last row "
@@ -779,8 +833,8 @@ void Bench::interpenetration_tables(std::ostream& report) const {
        {"no predictive rays", "predictive rays", "predictive rays + speculative contacts", "standard constraints",
         "projected constraints", "standard constraints, as the thesis ran", "projected constraints, as the thesis ran",
         kNearestVariant})
-    tt.rows.push_back({label, spread(summary(label, &SimOutcome::true_penetration)),
-                       spread(summary(label, &SimOutcome::deepest_true))});
+    tt.rows.push_back({label, spread(over_seeds(label, &SimOutcome::true_penetration)),
+                       spread(over_seeds(label, &SimOutcome::deepest_true))});
   tt.markdown(report);
   tt.csv(dir / "true_penetration.csv");
 }

@@ -156,6 +156,35 @@ void make_gimpact_shape(Kind& k) {
   k.gimpact_shape = std::move(compound);
 }
 
+// What snapshots draw for a kind: its mesh, or its primitive tessellated.
+RenderMesh kind_render_mesh(const Shape& shape, const BodySpec& spec) {
+  if (const Mesh* m = shape.mesh()) return render_mesh(*m);
+  if (spec.sphere) return render_mesh(gen::icosphere(*spec.sphere, 3));
+  return render_mesh(gen::box(*spec.box));
+}
+
+// The shape's bounds seen from its principal frame.
+Aabb principal_bounds(const Shape& shape, const Pose& principal) {
+  Aabb local;
+  const Pose to_principal = principal.inverse();
+  if (const Mesh* m = shape.mesh()) {
+    for (const auto& p : m->positions()) local.extend(to_principal.apply(p.cast<double>()));
+    return local;
+  }
+  const Aabb& b = shape.bounds();
+  for (int c = 0; c < 8; ++c)
+    local.extend(to_principal.apply({c & 1 ? b.max.x() : b.min.x(), c & 2 ? b.max.y() : b.min.y(),
+                                     c & 4 ? b.max.z() : b.min.z()}));
+  return local;
+}
+
+// The broad phase's shape for a kind: a box around `local`, in the principal frame.
+void make_broad_phase_box(Kind& k, const Aabb& local) {
+  k.bounds = std::make_unique<btBoxShape>(bt(0.5 * (local.max - local.min)));
+  k.collision = std::make_unique<btCompoundShape>(false);
+  k.collision->addChildShape(btTransform(btQuaternion::getIdentity(), bt(0.5 * (local.max + local.min))), k.bounds.get());
+}
+
 }  // namespace
 
 std::vector<std::shared_ptr<const Shape>> make_shapes(const Scene& scene, std::vector<std::string>* warnings) {
@@ -210,6 +239,10 @@ struct Simulation::Impl {
 
   Impl(const Scene& s, const std::string& backend_override, int threads);
   ~Impl();
+  // Setup, in this order: the narrow phases, Bullet's world, the kinds, the bodies.
+  void make_narrow_phases(const std::string& requested, bool use_gimpact, int threads);
+  void make_dispatcher(bool use_gimpact);
+  void make_world();
   void make_kinds();
   void add_body(size_t spec, const Pose& shape_pose, const Eigen::Vector3d& velocity, const Eigen::Vector3d& spin,
                 const std::string& label);
@@ -221,14 +254,36 @@ struct Simulation::Impl {
   // its points, so an effect that is not listed must leave them at zero.
   btScalar bullet_friction(double f) const { return scene.has(Effect::friction) ? btScalar(f) : btScalar(0); }
   btScalar bullet_restitution(double e) const { return scene.has(Effect::restitution) ? btScalar(e) : btScalar(0); }
+  // A step's stages around Bullet's, and what it counts after it.
+  void apply_gravity();
+  void check_poses(uint64_t step) const;
+  void count_batch(StepRecord& r);
+  void count_gimpact_batch(StepRecord& r);
+  double kinetic_energy() const;
+  // The interpenetration pass, and its parts.
   void measure();
+  std::vector<BodyPair> overlapping_pairs() const;
+  void pose_probes();
+  void track_deep_pairs(const StepResult& truth_step);
+  uint32_t body_number(BodyId id) const;
 };
 
 Simulation::Impl::Impl(const Scene& s, const std::string& backend_override, int threads) : scene(s), rng(s.seed) {
-  backend_name = backend_override.empty() ? scene.backend : backend_override;
+  const std::string requested = backend_override.empty() ? scene.backend : backend_override;
+  const bool use_gimpact = requested == kGimpact;
+  make_narrow_phases(requested, use_gimpact, threads);
+  configuration = std::make_unique<btDefaultCollisionConfiguration>();
+  make_dispatcher(use_gimpact);
+  make_world();
+  make_kinds();
+  if (scene.ground.present) add_ground();
+  emitted.assign(scene.bodies.size(), 0);
+  spawn_initial();
+}
+
+void Simulation::Impl::make_narrow_phases(const std::string& requested, bool use_gimpact, int threads) {
   const bool contacts = scene.has(Effect::contacts);
-  const bool use_gimpact = backend_name == kGimpact;
-  BackendOptions backend = use_gimpact ? BackendOptions{} : BackendOptions::parse(backend_name);
+  BackendOptions backend = use_gimpact ? BackendOptions{} : BackendOptions::parse(requested);
   if (threads > 0) backend.threads = threads;
   if (contacts && !use_gimpact) narrow = make_narrow_phase(backend, scene.narrow);
   if (scene.has(Effect::interpenetration)) {
@@ -244,14 +299,16 @@ Simulation::Impl::Impl(const Scene& s, const std::string& backend_override, int 
   else if (narrow) backend_name = narrow->name();
   else if (probe) backend_name = probe->name();
   else backend_name = "none";
+}
 
-  configuration = std::make_unique<btDefaultCollisionConfiguration>();
+// Who answers the broad phase's pairs: Bullet's GIMPACT, rtcd, or no one.
+void Simulation::Impl::make_dispatcher(bool use_gimpact) {
   if (use_gimpact) {
     auto d = std::make_unique<GimpactDispatcher>(configuration.get());
     btGImpactCollisionAlgorithm::registerAlgorithm(d.get());
     gimpact = d.get();
     dispatcher = std::move(d);
-  } else if (contacts) {
+  } else if (scene.has(Effect::contacts)) {
     DispatcherOptions options;
     options.points_per_pair = scene.points_per_pair;
     options.speculative = scene.has(Effect::speculative);
@@ -263,6 +320,9 @@ Simulation::Impl::Impl(const Scene& s, const std::string& backend_override, int 
   } else {
     dispatcher = std::make_unique<NoContacts>(configuration.get());
   }
+}
+
+void Simulation::Impl::make_world() {
   broadphase = std::make_unique<btDbvtBroadphase>();
   solver = std::make_unique<btSequentialImpulseConstraintSolver>();
   world = std::make_unique<TimedWorld>(dispatcher.get(), broadphase.get(), solver.get(), configuration.get());
@@ -275,10 +335,6 @@ Simulation::Impl::Impl(const Scene& s, const std::string& backend_override, int 
   // keep their energy.
   world->getSolverInfo().m_splitImpulse = true;
   world->getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
-  make_kinds();
-  if (scene.ground.present) add_ground();
-  emitted.assign(scene.bodies.size(), 0);
-  spawn_initial();
 }
 
 Simulation::Impl::~Impl() {
@@ -297,30 +353,12 @@ void Simulation::Impl::make_kinds() {
     // Two bodies within the extension overlap; a derived one is at least
     // the smaller body's resting extension, which the smaller box's growth covers.
     const double grow = 0.5 * scene.narrow.distance_extension.value_or(resting_extension(k.shape->radius()));
-    if (const Mesh* m = k.shape->mesh()) k.render = render_mesh(*m);
-    else if (spec.sphere) k.render = render_mesh(gen::icosphere(*spec.sphere, 3));
-    else k.render = render_mesh(gen::box(*spec.box));
+    k.render = kind_render_mesh(*k.shape, spec);
     if (!spec.is_static) {
       k.mass = spec.mass ? mass_properties_for_mass(*k.shape, *spec.mass) : mass_properties(*k.shape, *spec.density);
       k.principal = k.mass.principal_frame();
     }
-    // The shape's bounds seen from its principal frame, grown.
-    Aabb local;
-    const Pose to_principal = k.principal.inverse();
-    const auto corners = [&](const Aabb& b) {
-      for (int c = 0; c < 8; ++c)
-        local.extend(to_principal.apply({c & 1 ? b.max.x() : b.min.x(), c & 2 ? b.max.y() : b.min.y(),
-                                         c & 4 ? b.max.z() : b.min.z()}));
-    };
-    if (const Mesh* m = k.shape->mesh()) {
-      for (const auto& p : m->positions()) local.extend(to_principal.apply(p.cast<double>()));
-    } else {
-      corners(k.shape->bounds());
-    }
-    local = local.grown(grow);
-    k.bounds = std::make_unique<btBoxShape>(bt(0.5 * (local.max - local.min)));
-    k.collision = std::make_unique<btCompoundShape>(false);
-    k.collision->addChildShape(btTransform(btQuaternion::getIdentity(), bt(0.5 * (local.max + local.min))), k.bounds.get());
+    make_broad_phase_box(k, principal_bounds(*k.shape, k.principal).grown(grow));
     if (gimpact) make_gimpact_shape(k);
     if (narrow) k.id = narrow->add_shape(k.shape);
     if (probe) k.probe_id = probe->add_shape(k.shape);
@@ -425,22 +463,8 @@ void Simulation::Impl::emit(double time) {
 }
 
 void Simulation::Impl::measure() {
-  // Every pair whose boxes overlap, traced in full by the probe.
-  std::vector<BodyPair> pairs;
-  btOverlappingPairCache* cache = world->getBroadphase()->getOverlappingPairCache();
-  btBroadphasePairArray& array = cache->getOverlappingPairArray();
-  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
-    auto* o0 = static_cast<btRigidBody*>(array[i].m_pProxy0->m_clientObject);
-    auto* o1 = static_cast<btRigidBody*>(array[i].m_pProxy1->m_clientObject);
-    if (o0->isStaticObject() && o1->isStaticObject()) continue;
-    pairs.push_back({BodyId(o0->getUserIndex()), BodyId(o1->getUserIndex())});
-  }
-  for (const Body& b : bodies) {
-    const Kind* k = b.spec == SIZE_MAX ? nullptr : &kinds[b.spec];
-    const Pose pose = pose_of(b.rigid->getWorldTransform()) * (k ? k->principal.inverse() : Pose{});
-    probe->set_pose(b.id, pose);
-    truth->set_pose(b.id, pose);
-  }
+  const std::vector<BodyPair> pairs = overlapping_pairs();
+  pose_probes();
   const StepResult r = probe->detect(pairs);
   double sum = 0, projected = 0, deepest = 0;
   for (const Contact& c : r.contacts) {
@@ -459,7 +483,38 @@ void Simulation::Impl::measure() {
   }
   record.true_penetration = sum;
   record.deepest_true = deepest;
-  // Pairs held deep: a pair's size is its smaller body's diameter (the ground has none).
+  track_deep_pairs(t);
+  record.interpenetration_pairs = pairs.size();
+  ++counters.interpenetration_passes;
+}
+
+// Every pair whose boxes overlap, for the probes to trace in full.
+std::vector<BodyPair> Simulation::Impl::overlapping_pairs() const {
+  std::vector<BodyPair> pairs;
+  btOverlappingPairCache* cache = world->getBroadphase()->getOverlappingPairCache();
+  btBroadphasePairArray& array = cache->getOverlappingPairArray();
+  for (int i = 0; i < cache->getNumOverlappingPairs(); ++i) {
+    auto* o0 = static_cast<btRigidBody*>(array[i].m_pProxy0->m_clientObject);
+    auto* o1 = static_cast<btRigidBody*>(array[i].m_pProxy1->m_clientObject);
+    if (o0->isStaticObject() && o1->isStaticObject()) continue;
+    pairs.push_back({BodyId(o0->getUserIndex()), BodyId(o1->getUserIndex())});
+  }
+  return pairs;
+}
+
+// The probes' bodies where Bullet's are, in their shape frames.
+void Simulation::Impl::pose_probes() {
+  for (const Body& b : bodies) {
+    const Kind* k = b.spec == SIZE_MAX ? nullptr : &kinds[b.spec];
+    const Pose pose = pose_of(b.rigid->getWorldTransform()) * (k ? k->principal.inverse() : Pose{});
+    probe->set_pose(b.id, pose);
+    truth->set_pose(b.id, pose);
+  }
+}
+
+// Pairs held deep: deeper than 2% of a pair's size, its smaller body's
+// diameter (the ground has none), and for how many passes in a row.
+void Simulation::Impl::track_deep_pairs(const StepResult& truth_step) {
   const auto size = [&](BodyId id) {
     const Body& b = bodies[id];
     return b.spec == SIZE_MAX ? INFINITY : 2.0 * kinds[b.spec].shape->radius();
@@ -467,7 +522,7 @@ void Simulation::Impl::measure() {
   deep_runs_next.clear();
   uint32_t longest = 0;
   BodyPair held{};
-  for (const PairResult& p : t.pairs) {
+  for (const PairResult& p : truth_step.pairs) {
     if (!(p.max_depth > 0.02 * std::min(size(p.pair.a), size(p.pair.b)))) continue;
     const uint64_t key = pair_key(p.pair.a, p.pair.b);
     const auto before = deep_runs.find(key);
@@ -478,22 +533,93 @@ void Simulation::Impl::measure() {
   deep_runs.swap(deep_runs_next);
   record.deep_pairs = deep_runs.size();
   record.longest_deep_run = uint64_t(longest) * scene.interpenetration_every;
-  // Named as bodies() numbers them (the ground not counted).
-  const auto number = [&](BodyId id) {
-    if (bodies[id].spec == SIZE_MAX) return Simulation::kGround;
-    uint32_t n = 0;
-    for (BodyId k = 0; k < id; ++k) n += bodies[k].spec != SIZE_MAX;
-    return n;
-  };
-  record.longest_deep_pair = longest ? BodyPair{number(held.a), number(held.b)} : BodyPair{};
-  record.interpenetration_pairs = pairs.size();
-  ++counters.interpenetration_passes;
+  record.longest_deep_pair = longest ? BodyPair{body_number(held.a), body_number(held.b)} : BodyPair{};
+}
+
+// A body named as bodies() numbers them (the ground not counted).
+uint32_t Simulation::Impl::body_number(BodyId id) const {
+  if (bodies[id].spec == SIZE_MAX) return Simulation::kGround;
+  uint32_t n = 0;
+  for (BodyId k = 0; k < id; ++k) n += bodies[k].spec != SIZE_MAX;
+  return n;
 }
 
 Simulation::Simulation(const Scene& scene, const std::string& backend, int threads)
     : impl_(std::make_unique<Impl>(scene, backend, threads)) {}
 
 Simulation::~Simulation() = default;
+
+void Simulation::Impl::apply_gravity() {
+  const btVector3 g = bt(scene.gravity);
+  for (Body& b : bodies) {
+    if (b.rigid->isStaticObject()) continue;
+    b.rigid->applyCentralForce(g / b.rigid->getInvMass());
+    ++counters.gravity_forces;
+  }
+}
+
+// A body that blew up stops the run, named.
+void Simulation::Impl::check_poses(uint64_t step) const {
+  for (const Body& b : bodies) {
+    const btTransform& x = b.rigid->getWorldTransform();
+    const btVector3& o = x.getOrigin();
+    const btQuaternion q = x.getRotation();
+    if (!std::isfinite(o.x() + o.y() + o.z() + q.x() + q.y() + q.z() + q.w()))
+      throw SimulationError("step " + std::to_string(step) + ": body " + b.label + " has a non-finite pose");
+  }
+}
+
+// What rtcd's narrow phase did in the step.
+void Simulation::Impl::count_batch(StepRecord& r) {
+  const auto& last = batch->last_batch();
+  const StepResult& n = batch->last_step();
+  counters.narrow_phase_batches = last.calls;
+  counters.friction_points += last.friction_points;
+  counters.restitution_points += last.restitution_points;
+  counters.speculative_points += last.speculative_points;
+  r.pairs = last.pairs;
+  r.pairs_full = n.stats.pairs_full;
+  r.pairs_iterative = n.stats.pairs_iterative;
+  r.rays = n.stats;
+  r.device_rays.clear();
+  for (const DeviceWork& d : n.stats.devices) r.device_rays.push_back(d.rays);
+  r.cpu_fallback = n.stats.cpu_fallback;
+  r.contacts = n.contacts.size();
+  r.predictive = n.predictive.size();
+  r.solver_points = last.points;
+  r.speculative_points = last.speculative_points;
+  const BodyId ground = scene.ground.present ? 0 : UINT32_MAX;  // the ground is made first
+  for (const Contact& c : n.contacts) r.ground_contacts += c.source_body == ground || c.target_body == ground;
+}
+
+// What Bullet's GIMPACT did in the step, counted from its manifolds.
+void Simulation::Impl::count_gimpact_batch(StepRecord& r) {
+  counters.narrow_phase_batches = gimpact->batches;
+  counters.friction_points += gimpact->friction_points;
+  counters.restitution_points += gimpact->restitution_points;
+  r.pairs = size_t(world->getBroadphase()->getOverlappingPairCache()->getNumOverlappingPairs());
+  btDispatcher* d = dispatcher.get();
+  const btCollisionObject* ground = scene.ground.present ? bodies[0].rigid.get() : nullptr;
+  for (int i = 0; i < d->getNumManifolds(); ++i) {
+    const btPersistentManifold* manifold = d->getManifoldByIndexInternal(i);
+    const size_t points = size_t(manifold->getNumContacts());
+    r.contacts += points;
+    r.solver_points += points;
+    r.ground_contacts += manifold->getBody0() == ground || manifold->getBody1() == ground ? points : 0;
+  }
+}
+
+double Simulation::Impl::kinetic_energy() const {
+  double energy = 0;
+  for (const Body& b : bodies) {
+    if (b.rigid->isStaticObject()) continue;
+    const Kind& k = kinds[b.spec];
+    const Eigen::Vector3d v = eigen(b.rigid->getLinearVelocity());
+    const Eigen::Vector3d w_body = eigen(quatRotate(b.rigid->getOrientation().inverse(), b.rigid->getAngularVelocity()));
+    energy += 0.5 * k.mass.mass * v.squaredNorm() + 0.5 * w_body.dot(k.mass.principal_moments.cwiseProduct(w_body));
+  }
+  return energy;
+}
 
 const StepRecord& Simulation::step() {
   Impl& m = *impl_;
@@ -507,75 +633,21 @@ const StepRecord& Simulation::step() {
   double effects = 0;
   auto t = Clock::now();
   m.emit(double(index) * m.scene.time_step);
-  if (m.scene.has(Effect::gravity)) {
-    const btVector3 g = bt(m.scene.gravity);
-    for (Body& b : m.bodies) {
-      if (b.rigid->isStaticObject()) continue;
-      b.rigid->applyCentralForce(g / b.rigid->getInvMass());
-      ++m.counters.gravity_forces;
-    }
-  }
+  if (m.scene.has(Effect::gravity)) m.apply_gravity();
   effects += seconds_since(t);
 
   m.world->broad = m.world->narrow = m.world->solver = 0;
   m.world->stepSimulation(btScalar(m.scene.time_step), 0, btScalar(m.scene.time_step));
-
-  // A body that blew up stops the run, named.
-  for (const Body& b : m.bodies) {
-    const btTransform& x = b.rigid->getWorldTransform();
-    const btVector3& o = x.getOrigin();
-    const btQuaternion q = x.getRotation();
-    if (!std::isfinite(o.x() + o.y() + o.z() + q.x() + q.y() + q.z() + q.w()))
-      throw SimulationError("step " + std::to_string(index) + ": body " + b.label + " has a non-finite pose");
-  }
+  m.check_poses(index);
   ++m.counters.steps;
 
   r.bodies = m.bodies.size();
   r.seconds_broad = m.world->broad;
   r.seconds_narrow = m.world->narrow;
   r.seconds_solver = m.world->solver;
-  if (m.batch) {
-    const auto& batch = m.batch->last_batch();
-    const StepResult& n = m.batch->last_step();
-    m.counters.narrow_phase_batches = batch.calls;
-    m.counters.friction_points += batch.friction_points;
-    m.counters.restitution_points += batch.restitution_points;
-    m.counters.speculative_points += batch.speculative_points;
-    r.pairs = batch.pairs;
-    r.pairs_full = n.stats.pairs_full;
-    r.pairs_iterative = n.stats.pairs_iterative;
-    r.rays = n.stats;
-    r.device_rays.clear();
-    for (const DeviceWork& d : n.stats.devices) r.device_rays.push_back(d.rays);
-    r.cpu_fallback = n.stats.cpu_fallback;
-    r.contacts = n.contacts.size();
-    r.predictive = n.predictive.size();
-    r.solver_points = batch.points;
-    r.speculative_points = batch.speculative_points;
-    const BodyId ground = m.scene.ground.present ? 0 : UINT32_MAX;  // the ground is made first
-    for (const Contact& c : n.contacts) r.ground_contacts += c.source_body == ground || c.target_body == ground;
-  } else if (m.gimpact) {
-    m.counters.narrow_phase_batches = m.gimpact->batches;
-    m.counters.friction_points += m.gimpact->friction_points;
-    m.counters.restitution_points += m.gimpact->restitution_points;
-    r.pairs = size_t(m.world->getBroadphase()->getOverlappingPairCache()->getNumOverlappingPairs());
-    btDispatcher* d = m.dispatcher.get();
-    const btCollisionObject* ground = m.scene.ground.present ? m.bodies[0].rigid.get() : nullptr;
-    for (int i = 0; i < d->getNumManifolds(); ++i) {
-      const btPersistentManifold* manifold = d->getManifoldByIndexInternal(i);
-      const size_t points = size_t(manifold->getNumContacts());
-      r.contacts += points;
-      r.solver_points += points;
-      r.ground_contacts += manifold->getBody0() == ground || manifold->getBody1() == ground ? points : 0;
-    }
-  }
-  for (const Body& b : m.bodies) {
-    if (b.rigid->isStaticObject()) continue;
-    const Kind& k = m.kinds[b.spec];
-    const Eigen::Vector3d v = eigen(b.rigid->getLinearVelocity());
-    const Eigen::Vector3d w_body = eigen(quatRotate(b.rigid->getOrientation().inverse(), b.rigid->getAngularVelocity()));
-    r.kinetic_energy += 0.5 * k.mass.mass * v.squaredNorm() + 0.5 * w_body.dot(k.mass.principal_moments.cwiseProduct(w_body));
-  }
+  if (m.batch) m.count_batch(r);
+  else if (m.gimpact) m.count_gimpact_batch(r);
+  r.kinetic_energy = m.kinetic_energy();
 
   t = Clock::now();
   const bool last_step = m.counters.steps == m.scene.steps;

@@ -6,6 +6,7 @@
 #include <iomanip>
 #include <numbers>
 #include <optional>
+#include <span>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -115,27 +116,89 @@ std::string pose_text(const Pose& p) {
   return s.str();
 }
 
-}  // namespace
-
-const char* to_string(RunMode mode) { return mode == RunMode::full ? "full" : "iterative"; }
-
-RunMode parse_run_mode(const std::string& text) {
-  if (text == "full") return RunMode::full;
-  if (text == "iterative") return RunMode::iterative;
-  throw UsageError("unknown validation mode '" + text + "' (expected full or iterative)");
-}
-
-RunResult run_family(const Family& family, const RunOptions& options) {
+// The knobs a run's backend gets: the options' own, in the run's mode.
+Config run_config(const RunOptions& options) {
   if (options.pairs == 0) throw UsageError("a validation run needs at least one pair");
   if (options.mode == RunMode::iterative && options.motion_steps == 0)
     throw UsageError("an iterative validation run needs at least one motion step");
   Config config = options.config;
   config.mode = options.mode == RunMode::full ? Mode::full : Mode::automatic;
   config.validate();
-  const double epsilon = options.epsilon_scale * std::max(family.a->radius(), family.b->radius());
+  return config;
+}
 
+// What a pair is judged against: the exact reference, and FCL, GIMPACT
+// (libccd takes the shapes as they are) when the run has the oracles.
+struct References {
+  References(const Family& family, bool with_oracles) : exact_a(family.a), exact_b(family.b) {
+    if (!with_oracles) return;
+    fcl_a.emplace(*family.a);
+    fcl_b.emplace(*family.b);
+    gimpact_a.emplace(*family.a);
+    gimpact_b.emplace(*family.b);
+  }
+  const oracle::ExactShape exact_a, exact_b;
+  std::optional<oracle::FclShape> fcl_a, fcl_b;
+  std::optional<oracle::GimpactShape> gimpact_a, gimpact_b;
+};
+
+// One run_family: our backend steps every pair, then each pair is judged
+// and added to the summary, one method per job.
+class FamilyRun {
+ public:
+  FamilyRun(const Family& family, const RunOptions& options)
+      : family(family),
+        options(options),
+        config(run_config(options)),
+        epsilon(options.epsilon_scale * std::max(family.a->radius(), family.b->radius())),
+        // Over-reports: deeper than 1.25x the truth plus 1e-3 of the smaller body's radius.
+        allowance(1e-3 * std::min(family.a->radius(), family.b->radius())) {}
+
+  RunResult run() {
+    describe_run();
+    step_ours();
+    const References references(family, options.with_oracles);
+    ours_a.resize(family.a->sources().origins.size());
+    ours_b.resize(family.b->sources().origins.size());
+    for (size_t i = 0; i < options.pairs; ++i) {
+      const PairMetrics m = judge_pair(i, references);
+      add_to_summary(m);
+      result.pairs.push_back(m);
+    }
+    finish_summary();
+    return std::move(result);
+  }
+
+ private:
+  void describe_run();
+  // Our backend: every pair in one batch, as a host would step them.
+  void step_ours();
+  // Iterative runs: the steps before the judged one; the seconds of those timed.
+  double step_through_motions(NarrowPhase& narrow, std::span<const BodyPair> pairs);
+  PairMetrics judge_pair(size_t i, const References& references);
+  void mark_our_rays(size_t i, PairMetrics& m);
+  void count_crossings(const References& references, PairMetrics& m);
+  void run_oracles(size_t i, const References& references, PairMetrics& m);
+  void add_to_summary(const PairMetrics& m);
+  void finish_summary();
+
+  const Family& family;
+  const RunOptions& options;
+  const Config config;
+  const double epsilon, allowance;
   RunResult result;
   Summary& s = result.summary;
+  std::vector<PosePair> judged;
+  StepResult step;  // the judged one
+  // What was tracked going into the judged step (iterative runs).
+  std::vector<std::vector<std::pair<Side, uint32_t>>> tracked;
+  std::vector<size_t> full_steps;
+  std::vector<OurRay> ours_a, ours_b;  // of the pair being judged
+  double depth_error_sum = 0.0, ccd_difference_sum = 0.0, ccd_ratio_sum = 0.0;
+  std::vector<double> missed_rates, truth_ratios, push_angles;
+};
+
+void FamilyRun::describe_run() {
   s.family = family.name;
   s.mode = options.mode;
   s.config = config;
@@ -144,47 +207,24 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   s.epsilon = epsilon;
   s.with_oracles = options.with_oracles;
   if (options.mode == RunMode::iterative) s.motion_steps = options.pairs * options.motion_steps;
+}
 
-  // Our backend: every pair in one batch, as a host would step them.
+void FamilyRun::step_ours() {
   BackendOptions backend = BackendOptions::parse(options.backend);
   if (options.single_thread) backend.threads = 1;
   auto narrow = make_narrow_phase(backend, config);
   s.backend = narrow->name();
   const ShapeId sa = narrow->add_shape(family.a), sb = narrow->add_shape(family.b);
-  std::vector<PosePair> judged(options.pairs);
+  judged.resize(options.pairs);
   std::vector<BodyPair> pairs(options.pairs);
   for (size_t i = 0; i < options.pairs; ++i) {
     judged[i] = random_poses(family, options.seed, i);
     pairs[i] = {narrow->add_body(sa, judged[i].a), narrow->add_body(sb, judged[i].b)};
   }
-  StepResult step;
-  // What was tracked going into the judged step (iterative runs).
-  std::vector<std::vector<std::pair<Side, uint32_t>>> tracked(options.pairs);
-  std::vector<size_t> full_steps(options.pairs, 0);
-  double seconds = 0.0;  // of the timed steps: the one full step, or every step after it
-  if (options.mode == RunMode::iterative) {
-    narrow->detect(pairs, step);
-    for (size_t k = 0; k < options.motion_steps; ++k) {
-      if (k > 0) {
-        const auto t = Clock::now();
-        narrow->detect(pairs, step);
-        seconds += seconds_since(t);
-        for (size_t i = 0; i < options.pairs; ++i) full_steps[i] += step.pairs[i].mode == PairMode::full;
-      }
-      if (k + 1 == options.motion_steps) {
-        for (size_t i = 0; i < options.pairs; ++i) {
-          for (const Contact& c : step.contacts_of(step.pairs[i]))
-            if (c.kind == ContactKind::vertex) tracked[i].push_back({c.source, c.vertex});
-          for (const PredictiveRay& p : step.predictive_of(step.pairs[i])) tracked[i].push_back({p.source, p.vertex});
-        }
-      }
-      for (size_t i = 0; i < options.pairs; ++i) {
-        judged[i] = moved(family, judged[i], family.step_motion(), options.seed, i);
-        narrow->set_pose(pairs[i].a, judged[i].a);
-        narrow->set_pose(pairs[i].b, judged[i].b);
-      }
-    }
-  }
+  tracked.resize(options.pairs);
+  full_steps.assign(options.pairs, 0);
+  // Of the timed steps: the one full step, or every step after it.
+  double seconds = options.mode == RunMode::iterative ? step_through_motions(*narrow, pairs) : 0.0;
   const auto t0 = Clock::now();
   narrow->detect(pairs, step);
   seconds += seconds_since(t0);
@@ -194,123 +234,151 @@ RunResult run_family(const Family& family, const RunOptions& options) {
   s.vertex_rays = step.stats.rays_full + step.stats.rays_predictive + step.stats.rays_iterative;
   s.edge_rays = step.stats.edge_rays;
   s.edges_tested = step.stats.edges_tested;
-  const oracle::ExactShape exact_a(family.a), exact_b(family.b);
-  std::optional<oracle::FclShape> fcl_a, fcl_b;
-  std::optional<oracle::GimpactShape> gimpact_a, gimpact_b;
-  if (options.with_oracles) {
-    fcl_a.emplace(*family.a);
-    fcl_b.emplace(*family.b);
-    gimpact_a.emplace(*family.a);
-    gimpact_b.emplace(*family.b);
-  }
+}
 
-  double depth_error_sum = 0.0, ccd_difference_sum = 0.0, ccd_ratio_sum = 0.0;
-  std::vector<OurRay> ours_a(family.a->sources().origins.size()), ours_b(family.b->sources().origins.size());
-  std::vector<double> missed_rates, truth_ratios, push_angles;
-  // Over-reports: deeper than 1.25x the truth plus 1e-3 of the smaller body's radius.
-  const double allowance = 1e-3 * std::min(family.a->radius(), family.b->radius());
-  for (size_t i = 0; i < options.pairs; ++i) {
-    PairMetrics m;
-    m.index = i;
-    m.poses = judged[i];
-    const PairResult& pr = step.pairs[i];
-    m.iterative = pr.mode == PairMode::iterative;
-    m.full_steps = full_steps[i] + (options.mode == RunMode::iterative && !m.iterative);
-    m.colliding_ours = pr.colliding;
-    std::fill(ours_a.begin(), ours_a.end(), OurRay{});
-    std::fill(ours_b.begin(), ours_b.end(), OurRay{});
-    for (const auto& [side, vertex] : tracked[i]) (side == Side::a ? ours_a : ours_b)[vertex].tracked = true;
-    for (const Contact& c : step.contacts_of(pr)) {
-      // Edge contacts are judged by pair (crossing_deep), vertex rays one by one.
-      if (c.kind == ContactKind::vertex) (c.source == Side::a ? ours_a : ours_b)[c.vertex].depth = c.depth;
-      m.our_projected_depth = std::max(m.our_projected_depth, c.projected_depth);
+double FamilyRun::step_through_motions(NarrowPhase& narrow, std::span<const BodyPair> pairs) {
+  double seconds = 0.0;
+  narrow.detect(pairs, step);
+  for (size_t k = 0; k < options.motion_steps; ++k) {
+    if (k > 0) {
+      const auto t = Clock::now();
+      narrow.detect(pairs, step);
+      seconds += seconds_since(t);
+      for (size_t i = 0; i < options.pairs; ++i) full_steps[i] += step.pairs[i].mode == PairMode::full;
     }
-
-    auto t = Clock::now();
-    const auto rays_ab = exact_b.rays_from(*family.a, m.poses.a, m.poses.b, epsilon);
-    const auto rays_ba = exact_a.rays_from(*family.b, m.poses.b, m.poses.a, epsilon);
-    s.time_exact += seconds_since(t);
-    judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
-    judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
-    judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, allowance, m, truth_ratios, push_angles);
-    t = Clock::now();
-    // Edge crossings, and a sphere's cap in a sphere or a box, in closed form.
-    for (auto depths : {exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),
-                        exact_a.edge_depths(*family.b, m.poses.b, m.poses.a)})
-      for (double depth : depths) {
-        m.crossing_deep += depth > epsilon;
-        m.crossing_any += depth > 0.0;
+    if (k + 1 == options.motion_steps) {
+      for (size_t i = 0; i < options.pairs; ++i) {
+        for (const Contact& c : step.contacts_of(step.pairs[i]))
+          if (c.kind == ContactKind::vertex) tracked[i].push_back({c.source, c.vertex});
+        for (const PredictiveRay& p : step.predictive_of(step.pairs[i])) tracked[i].push_back({p.source, p.vertex});
       }
-    for (double depth : {exact_b.sphere_depth(*family.a, m.poses.a, m.poses.b),
-                         exact_a.sphere_depth(*family.b, m.poses.b, m.poses.a)}) {
+    }
+    for (size_t i = 0; i < options.pairs; ++i) {
+      judged[i] = moved(family, judged[i], family.step_motion(), options.seed, i);
+      narrow.set_pose(pairs[i].a, judged[i].a);
+      narrow.set_pose(pairs[i].b, judged[i].b);
+    }
+  }
+  return seconds;
+}
+
+PairMetrics FamilyRun::judge_pair(size_t i, const References& references) {
+  const oracle::ExactShape& exact_a = references.exact_a;
+  const oracle::ExactShape& exact_b = references.exact_b;
+  PairMetrics m;
+  m.index = i;
+  m.poses = judged[i];
+  const PairResult& pr = step.pairs[i];
+  m.iterative = pr.mode == PairMode::iterative;
+  m.full_steps = full_steps[i] + (options.mode == RunMode::iterative && !m.iterative);
+  m.colliding_ours = pr.colliding;
+  mark_our_rays(i, m);
+
+  const auto t = Clock::now();
+  const auto rays_ab = exact_b.rays_from(*family.a, m.poses.a, m.poses.b, epsilon);
+  const auto rays_ba = exact_a.rays_from(*family.b, m.poses.b, m.poses.a, epsilon);
+  s.time_exact += seconds_since(t);
+  judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
+  judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
+  judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, allowance, m, truth_ratios, push_angles);
+  count_crossings(references, m);
+  m.colliding_exact = m.deep > 0 || m.crossing_deep > 0;
+  if (options.with_oracles) run_oracles(i, references, m);
+  return m;
+}
+
+// Our rays of pair i, per origin: its depth, and whether it was tracked.
+void FamilyRun::mark_our_rays(size_t i, PairMetrics& m) {
+  std::fill(ours_a.begin(), ours_a.end(), OurRay{});
+  std::fill(ours_b.begin(), ours_b.end(), OurRay{});
+  for (const auto& [side, vertex] : tracked[i]) (side == Side::a ? ours_a : ours_b)[vertex].tracked = true;
+  for (const Contact& c : step.contacts_of(step.pairs[i])) {
+    // Edge contacts are judged by pair (crossing_deep), vertex rays one by one.
+    if (c.kind == ContactKind::vertex) (c.source == Side::a ? ours_a : ours_b)[c.vertex].depth = c.depth;
+    m.our_projected_depth = std::max(m.our_projected_depth, c.projected_depth);
+  }
+}
+
+// Edge crossings, and a sphere's cap in a sphere or a box, in closed form.
+void FamilyRun::count_crossings(const References& references, PairMetrics& m) {
+  const auto t = Clock::now();
+  for (auto depths : {references.exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),
+                      references.exact_a.edge_depths(*family.b, m.poses.b, m.poses.a)})
+    for (double depth : depths) {
       m.crossing_deep += depth > epsilon;
       m.crossing_any += depth > 0.0;
     }
-    s.time_exact += seconds_since(t);
-    m.colliding_exact = m.deep > 0 || m.crossing_deep > 0;
-
-    if (options.with_oracles) {
-      t = Clock::now();
-      m.fcl = fcl_a->collide(m.poses.a, *fcl_b, m.poses.b).colliding;
-      s.time_fcl += seconds_since(t);
-      // All contacts, the query comparable to ours.
-      t = Clock::now();
-      fcl_a->collide(m.poses.a, *fcl_b, m.poses.b, true, 1'000'000);
-      s.time_fcl_contacts += seconds_since(t);
-      if (i < options.gimpact_pairs) {
-        t = Clock::now();
-        m.gimpact = gimpact_a->collide(m.poses.a, *gimpact_b, m.poses.b).colliding;
-        s.time_gimpact += seconds_since(t);
-        m.has_gimpact = true;
-        ++s.gimpact_runs;
-      }
-      if (family.convex) {
-        t = Clock::now();
-        const auto p = oracle::ccd_penetration(*family.a, m.poses.a, *family.b, m.poses.b);
-        s.time_ccd += seconds_since(t);
-        m.has_ccd = true;
-        m.ccd = p.colliding;
-        m.ccd_depth = p.depth;
-      }
-    }
-
-    // Aggregate.
-    s.iterative_pairs += m.iterative;
-    s.full_steps += m.full_steps;
-    s.deep += m.deep;
-    s.missed += m.missed;
-    s.missed_untracked += m.missed_untracked;
-    s.far_outside += m.far_outside;
-    s.false_rays += m.false_rays;
-    s.depth_checked += m.depth_checked;
-    s.truth_checked += m.truth_checked;
-    s.over_reports += m.over_reports;
-    s.max_depth_error = std::max(s.max_depth_error, m.max_depth_error);
-    s.max_relative_depth_error = std::max(s.max_relative_depth_error, m.max_relative_depth_error);
-    if (m.deep) missed_rates.push_back(m.missed_rate());
-    s.colliding += m.colliding_exact;
-    s.crossing_pairs += m.colliding_exact && m.deep == 0;
-    s.missed_pairs += m.colliding_exact && !m.colliding_ours;
-    s.false_pairs += m.colliding_ours && m.inside_any == 0 && m.crossing_any == 0;
-    s.contained += m.contained && m.colliding_exact;
-    if (options.with_oracles) {
-      if (m.colliding_exact && !m.contained) {
-        ++s.fcl_checked;
-        s.fcl_agree += m.fcl;
-        s.gimpact_checked += m.has_gimpact;
-        s.gimpact_agree += m.has_gimpact && m.gimpact;
-      }
-      s.fcl_blind_contained += m.contained && m.colliding_exact && !m.fcl;
-      s.fcl_missed_pairs += m.fcl && m.colliding_exact && !m.colliding_ours;
-      s.fcl_touching_pairs += m.fcl && !m.colliding_exact && !m.colliding_ours;
-      if (m.has_ccd && m.ccd && m.colliding_ours) {
-        ++s.ccd_pairs;
-        ccd_difference_sum += std::abs(m.our_projected_depth - m.ccd_depth);
-        ccd_ratio_sum += m.our_projected_depth / m.ccd_depth;
-      }
-    }
-    result.pairs.push_back(m);
+  for (double depth : {references.exact_b.sphere_depth(*family.a, m.poses.a, m.poses.b),
+                       references.exact_a.sphere_depth(*family.b, m.poses.b, m.poses.a)}) {
+    m.crossing_deep += depth > epsilon;
+    m.crossing_any += depth > 0.0;
   }
+  s.time_exact += seconds_since(t);
+}
+
+void FamilyRun::run_oracles(size_t i, const References& references, PairMetrics& m) {
+  auto t = Clock::now();
+  m.fcl = references.fcl_a->collide(m.poses.a, *references.fcl_b, m.poses.b).colliding;
+  s.time_fcl += seconds_since(t);
+  // All contacts, the query comparable to ours.
+  t = Clock::now();
+  references.fcl_a->collide(m.poses.a, *references.fcl_b, m.poses.b, true, 1'000'000);
+  s.time_fcl_contacts += seconds_since(t);
+  if (i < options.gimpact_pairs) {
+    t = Clock::now();
+    m.gimpact = references.gimpact_a->collide(m.poses.a, *references.gimpact_b, m.poses.b).colliding;
+    s.time_gimpact += seconds_since(t);
+    m.has_gimpact = true;
+    ++s.gimpact_runs;
+  }
+  if (family.convex) {
+    t = Clock::now();
+    const auto p = oracle::ccd_penetration(*family.a, m.poses.a, *family.b, m.poses.b);
+    s.time_ccd += seconds_since(t);
+    m.has_ccd = true;
+    m.ccd = p.colliding;
+    m.ccd_depth = p.depth;
+  }
+}
+
+void FamilyRun::add_to_summary(const PairMetrics& m) {
+  s.iterative_pairs += m.iterative;
+  s.full_steps += m.full_steps;
+  s.deep += m.deep;
+  s.missed += m.missed;
+  s.missed_untracked += m.missed_untracked;
+  s.far_outside += m.far_outside;
+  s.false_rays += m.false_rays;
+  s.depth_checked += m.depth_checked;
+  s.truth_checked += m.truth_checked;
+  s.over_reports += m.over_reports;
+  s.max_depth_error = std::max(s.max_depth_error, m.max_depth_error);
+  s.max_relative_depth_error = std::max(s.max_relative_depth_error, m.max_relative_depth_error);
+  if (m.deep) missed_rates.push_back(m.missed_rate());
+  s.colliding += m.colliding_exact;
+  s.crossing_pairs += m.colliding_exact && m.deep == 0;
+  s.missed_pairs += m.colliding_exact && !m.colliding_ours;
+  s.false_pairs += m.colliding_ours && m.inside_any == 0 && m.crossing_any == 0;
+  s.contained += m.contained && m.colliding_exact;
+  if (!options.with_oracles) return;
+  if (m.colliding_exact && !m.contained) {
+    ++s.fcl_checked;
+    s.fcl_agree += m.fcl;
+    s.gimpact_checked += m.has_gimpact;
+    s.gimpact_agree += m.has_gimpact && m.gimpact;
+  }
+  s.fcl_blind_contained += m.contained && m.colliding_exact && !m.fcl;
+  s.fcl_missed_pairs += m.fcl && m.colliding_exact && !m.colliding_ours;
+  s.fcl_touching_pairs += m.fcl && !m.colliding_exact && !m.colliding_ours;
+  if (m.has_ccd && m.ccd && m.colliding_ours) {
+    ++s.ccd_pairs;
+    ccd_difference_sum += std::abs(m.our_projected_depth - m.ccd_depth);
+    ccd_ratio_sum += m.our_projected_depth / m.ccd_depth;
+  }
+}
+
+// Times per pair, means and percentiles, once every pair is in.
+void FamilyRun::finish_summary() {
   const double n = double(options.pairs);
   s.time_exact /= n;
   s.time_fcl /= n;
@@ -331,8 +399,19 @@ RunResult run_family(const Family& family, const RunOptions& options) {
     s.ccd_mean_abs_difference = ccd_difference_sum / double(s.ccd_pairs);
     s.ccd_mean_ratio = ccd_ratio_sum / double(s.ccd_pairs);
   }
-  return result;
 }
+
+}  // namespace
+
+const char* to_string(RunMode mode) { return mode == RunMode::full ? "full" : "iterative"; }
+
+RunMode parse_run_mode(const std::string& text) {
+  if (text == "full") return RunMode::full;
+  if (text == "iterative") return RunMode::iterative;
+  throw UsageError("unknown validation mode '" + text + "' (expected full or iterative)");
+}
+
+RunResult run_family(const Family& family, const RunOptions& options) { return FamilyRun(family, options).run(); }
 
 nlohmann::json to_json(const Summary& s) {
   return {{"family", s.family},
