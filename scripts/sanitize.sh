@@ -3,30 +3,20 @@
 # asan preset): every label but the differential runs (their 1,000 pairs per
 # family take too long instrumented; the robustness and conformance suites
 # cover the same code paths) and the consumer build, each test bounded.
-# Left out as well, to keep CI within its 30 minutes (edge rays made
-# the release ctest run 400 s against 175 s before them): the robustness suite on the
-# brute-force tracers (`basic`, `opencl-basic`: minutes instrumented; embree
-# and opencl run the same cases through the same pipeline and per-ray code),
-# its high-resolution and tiny/huge cases (a 100,000-triangle target; the
-# release suite runs both), the metamorphic cases on OpenCL (twenty narrow
+# Left out as well, each run by the release suite: the robustness suite on
+# the brute-force tracers (`basic`, `opencl-basic`: minutes a case
+# instrumented; embree and opencl run the same cases through the same
+# pipeline and per-ray code), the metamorphic cases on OpenCL (twenty narrow
 # phases each, whose PoCL threads crashed LeakSanitizer's exit check twice
-# in one run after passing; the release suite runs them), the benches
-# (Bench.WritesEveryTable and the CLI's: end to end, minutes instrumented;
-# the release suite runs them and the recording reader is fuzzed under ASan
-# by scripts/fuzz.sh), and the Embree instruction-set comparison (Embree's
-# own code is not instrumented), and OpenCL's BVH over every family in full
-# mode (the release suite runs it; opencl runs through the same host code in
-# the other OpenCL tests here), and, to make room for the Python package's
-# build and tests in the release run, three checks of numbers rather than
-# memory whose code the instrumented suite runs elsewhere: determinism
-# across runs and thread counts on embree and opencl (35 s each
-# instrumented; the steps it repeats run once each in the other robustness
-# and conformance tests), the committed
-# scenes run end to end (SimCli.RunLeavesItsOutputs runs `rtcd run`), and
-# the torus's mass against its closed form (the other mass tests run the
-# same integration). The
-# allocation count is not built here (it replaces malloc, which would bypass
-# ASan's allocator).
+# in one run after passing), the benches (Bench.WritesEveryTable and the
+# CLI's: end to end, minutes instrumented; the recording reader is fuzzed
+# under ASan by scripts/fuzz.sh), the Embree instruction-set comparison
+# (Embree's own code is not instrumented), OpenCL's BVH over every family in
+# full mode (opencl runs through the same host code in the other OpenCL
+# tests here), the committed scenes run end to end (SimCli.RunLeavesItsOutputs
+# runs `rtcd run`), and the torus's mass against its closed form (the other
+# mass tests run the same integration). The allocation count is not built
+# here (it replaces malloc, which would bypass ASan's allocator).
 # The OpenCL tests run too, on PoCL's CPU devices (ctest sets POCL_DEVICES):
 # LeakSanitizer skips PoCL's known leak by the function it happens in
 # (fuzz/lsan.supp), which needs the slow unwinder; rtcd's own allocations,
@@ -44,4 +34,4 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp}
 # after they passed. Leaks are still checked from stacks, static TLS and globals.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-fast_unwind_on_malloc=0:intercept_tls_get_addr=0}
 ctest --preset asan -j2 -LE "differential|consumer" \
-  -E "^Backends/Robustness\.[A-Za-z]+/(basic|opencl_basic)( |$)|^Backends/Robustness\.(HighResolutionTarget|TinyHugeAndFarBodies)/|^Backends/Metamorphic\.[A-Za-z]+/opencl|^Bench\.WritesEveryTable|^OpenCl\.BvhMissesNothingInFullMode|^CliFiles\.BenchRunsTheSmallStream|^Robustness\.EmbreeInstructionSets|^Backends/Robustness\.DeterministicAcrossRunsAndThreadCounts/(embree|opencl)( |$)|^SimCli\.CommittedScenesRunAndBadScenesExit2|^Mass\.TorusMatchesClosedForm" --timeout 600 "$@"
+  -E "^Backends/Robustness\.[A-Za-z]+/(basic|opencl_basic)( |$)|^Backends/Metamorphic\.[A-Za-z]+/opencl|^Bench\.WritesEveryTable|^OpenCl\.BvhMissesNothingInFullMode|^CliFiles\.BenchRunsTheSmallStream|^Robustness\.EmbreeInstructionSets|^SimCli\.CommittedScenesRunAndBadScenesExit2|^Mass\.TorusMatchesClosedForm" --timeout 600 "$@"
