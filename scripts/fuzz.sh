@@ -6,10 +6,17 @@
 # crashing inputs are kept under build/fuzz/artifacts/<harness>/.
 #   scripts/fuzz.sh                      # every harness
 #   FUZZ_SECONDS=600 scripts/fuzz.sh mesh_pair
+# A campaign (FUZZ_CAMPAIGN=1): each harness for FUZZ_SECONDS on every core
+# (libFuzzer's -fork, going on past crashes), then what it found merged
+# with -merge=1 into fuzz/corpus/<harness>/ (only inputs that add coverage
+# join the seeds), and every finding copied to fuzz/regressions/<harness>/
+# for review: commit the corpus, fix each finding and keep it as a regression.
+#   FUZZ_CAMPAIGN=1 FUZZ_SECONDS=3600 scripts/fuzz.sh
 set -uo pipefail
 cd "$(dirname "$0")/.."
 
 seconds=${FUZZ_SECONDS:-60}
+campaign=${FUZZ_CAMPAIGN:-0}
 timeout=${FUZZ_TIMEOUT:-30}  # seconds one input may take before it counts as a hang
 all=(mesh_pair mesh_file pose_sequence scene recording opencl)
 if [ $# -gt 0 ]; then harnesses=("$@"); else harnesses=("${all[@]}"); fi
@@ -62,18 +69,41 @@ for h in "${harnesses[@]}"; do
     seeds=fuzz/corpus/$h
     [ "$h" = opencl ] && seeds=fuzz/corpus/mesh_pair
     cp -r "$seeds" "$scratch/$h"
+    touch "$scratch/$h.log.start"
     dict=()
     [ -f "fuzz/$h.dict" ] && dict=(-dict="fuzz/$h.dict")
     # FUZZ_ARGS: extra libFuzzer flags, e.g. FUZZ_ARGS="-seed=1 -max_len=512".
+    mode=()
+    [ "$campaign" = 1 ] && mode=(-fork="$(nproc)" -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1)
     # shellcheck disable=SC2086
     "${unwind[@]}" "$bin" -max_total_time="$seconds" -timeout="$timeout" -rss_limit_mb=4096 -print_final_stats=1 \
-      "${dict[@]}" -artifact_prefix="$artifacts/" ${FUZZ_ARGS:-} "$scratch/$h" >"$scratch/$h.log" 2>&1
+      "${mode[@]}" "${dict[@]}" -artifact_prefix="$artifacts/" ${FUZZ_ARGS:-} "$scratch/$h" >"$scratch/$h.log" 2>&1
     rc=$?
     runs=$(grep -o 'Done [0-9]* runs in [0-9]* second(s)' "$scratch/$h.log" | tail -n 1)
     # A crash ends the run before "Done": count the executions from the final stats.
     [ -z "$runs" ] && runs=$(grep -o 'stat::number_of_executed_units: [0-9]*' "$scratch/$h.log" | sed 's/.*: /crashed after /;s/$/ runs/')
+    # Fork mode reports its executions on its status lines (#N).
+    [ -z "$runs" ] && runs=$(grep -o '^#[0-9]*' "$scratch/$h.log" | tail -n 1 | sed 's/#\(.*\)/\1 runs/')
     [ -n "$runs" ] && echo "$h: $runs"
-    if [ $rc -ne 0 ]; then
+    if [ "$campaign" = 1 ]; then
+      findings=$(find "$artifacts" -maxdepth 1 -type f \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \) -newer "$scratch/$h.log.start" | wc -l)
+      if [ "$findings" -gt 0 ]; then
+        mkdir -p "fuzz/regressions/$h"
+        find "$artifacts" -maxdepth 1 -type f \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \) \
+          -newer "$scratch/$h.log.start" -exec cp {} "fuzz/regressions/$h/" \;
+        result="$findings finding(s), copied to fuzz/regressions/$h/"
+      elif [ $rc -ne 0 ]; then
+        tail -n 60 "$scratch/$h.log"
+        result="failed (rc $rc)"
+      fi
+      # The opencl harness reads mesh_pair's inputs: its corpus is mesh_pair's.
+      if [ "$h" != opencl ]; then
+        before=$(ls "fuzz/corpus/$h" | wc -l)
+        "${unwind[@]}" "$bin" -merge=1 -timeout="$timeout" -rss_limit_mb=4096 "fuzz/corpus/$h" "$scratch/$h" \
+          >"$scratch/$h.merge.log" 2>&1 &&
+          echo "$h: $(($(ls "fuzz/corpus/$h" | wc -l) - before)) input(s) that add coverage merged into fuzz/corpus/$h"
+      fi
+    elif [ $rc -ne 0 ]; then
       tail -n 60 "$scratch/$h.log"
       result="crashed (rc $rc; input saved under $artifacts/)"
     fi
