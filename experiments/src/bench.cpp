@@ -444,7 +444,7 @@ ReplayConfig Bench::our_config(std::string label, std::string backend, Mode mode
   if (threshold >= 0) c.config.displacement_threshold = threshold;
   c.threads = threads;
   // Brute force in full mode is sampled: it costs rays x triangles a step.
-  const bool brute_force = backend == "basic" || backend == "opencl-basic";
+  const bool brute_force = c.backend == "basic" || c.backend == "opencl-basic";
   c.every = mode == Mode::full && brute_force ? full_every : 1;
   c.budget_seconds = o.budget_seconds;
   return c;
