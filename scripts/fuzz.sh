@@ -86,12 +86,13 @@ for h in "${harnesses[@]}"; do
     [ -z "$runs" ] && runs=$(grep -o '^#[0-9]*' "$scratch/$h.log" | tail -n 1 | sed 's/#\(.*\)/\1 runs/')
     [ -n "$runs" ] && echo "$h: $runs"
     if [ "$campaign" = 1 ]; then
-      findings=$(find "$artifacts" -maxdepth 1 -type f \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \) -newer "$scratch/$h.log.start" | wc -l)
-      if [ "$findings" -gt 0 ]; then
+      # This campaign's findings: libFuzzer names them by kind.
+      mapfile -t found < <(find "$artifacts" -maxdepth 1 -type f -newer "$scratch/$h.log.start" \
+        \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \))
+      if [ "${#found[@]}" -gt 0 ]; then
         mkdir -p "fuzz/regressions/$h"
-        find "$artifacts" -maxdepth 1 -type f \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' \) \
-          -newer "$scratch/$h.log.start" -exec cp {} "fuzz/regressions/$h/" \;
-        result="$findings finding(s), copied to fuzz/regressions/$h/"
+        cp "${found[@]}" "fuzz/regressions/$h/"
+        result="${#found[@]} finding(s), copied to fuzz/regressions/$h/"
       elif [ $rc -ne 0 ]; then
         tail -n 60 "$scratch/$h.log"
         result="failed (rc $rc)"

@@ -55,7 +55,8 @@ std::vector<Case> all_cases() {
 // The first backend a family is judged on: its cases run the reference
 // libraries, once per family (basic sits out the large families).
 std::string oracle_backend(const std::string& family) {
-  for (const Case& c : all_cases())
+  static const std::vector<Case> cases = all_cases();  // the backends probed once
+  for (const Case& c : cases)
     if (c.family == family) return c.backend;
   return "";
 }
