@@ -7,6 +7,7 @@
 #include <CLI/CLI.hpp>
 
 #include "knob_options.hpp"
+#include "mpi_ranks.hpp"
 #include "rtcd/app/bench.hpp"
 #include "rtcd/app/check.hpp"
 #include "rtcd/app/inputs.hpp"
@@ -42,6 +43,19 @@ int run_backends(bool json) {
     for (const auto& b : list) std::cout << b.name << (b.usable ? "  " : "  (unusable)  ") << b.detail << '\n';
   }
   return 0;
+}
+
+// `rtcd validate`, on every rank of the MPI job when mpirun started it. A
+// rank that fails ends the whole job: the others would wait for it.
+int run_validate_on_ranks(const rtcd::app::ValidateOptions& v) {
+  const auto ranks = rtcd::cli::mpi_ranks_if_launched();
+  if (!ranks || ranks->size() == 1) return rtcd::app::run_validate(v, ranks ? *ranks : rtcd::app::one_process());
+  try {
+    return rtcd::app::run_validate(v, *ranks);
+  } catch (const std::exception& e) {
+    std::cerr << "rtcd: rank " << ranks->rank() << ": " << e.what() << '\n';
+    rtcd::cli::abort_job(dynamic_cast<const rtcd::Error*>(&e) ? kBadInput : 1);
+  }
 }
 
 int run_query(const QueryOptions& o) {
@@ -141,6 +155,13 @@ int main(int argc, char** argv) {
   validate->add_flag("--json", v.json, "Print JSON");
   validate->add_flag("--sweep", sweep, "Sweep the accuracy knobs; write CSV (see --csv)");
   validate->add_option("--csv", v.sweep_csv, "Where --sweep writes its CSV (default: standard output)");
+  validate->add_option("--campaign", v.campaign,
+                       "Keep every finished shard of pairs in this directory; started again with it, run only the "
+                       "shards it lacks (exit 3 while some are left)");
+  validate->add_option("--shard-pairs", v.shard_pairs, "Pairs per shard of a campaign (default: 100)")
+      ->check(CLI::Range(size_t(1), size_t(10'000'000)));
+  validate->add_option("--hours", v.hours, "Start no shard of a campaign after this many hours (default: no limit)")
+      ->check(CLI::NonNegativeNumber);
 
   rtcd::app::RunOptions r;
   uint64_t run_steps = 0;
@@ -209,7 +230,9 @@ int main(int argc, char** argv) {
     if (*validate) {
       if (sweep && v.sweep_csv.empty()) v.sweep_csv = "-";
       if (!sweep && !v.sweep_csv.empty()) throw rtcd::UsageError("--csv needs --sweep");
-      return rtcd::app::run_validate(v);
+      if (v.campaign.empty() && (validate->count("--shard-pairs") || validate->count("--hours")))
+        throw rtcd::UsageError("--shard-pairs and --hours need --campaign");
+      return run_validate_on_ranks(v);
     }
     return run_query(q);
   } catch (const CLI::CallForHelp& e) {

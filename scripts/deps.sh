@@ -9,6 +9,7 @@ packages=(
   libgtest-dev libbenchmark-dev
   libfcl-dev libccd-dev libbullet-dev libstb-dev python3-matplotlib
   pocl-opencl-icd opencl-clhpp-headers opencl-c-headers ocl-icd-opencl-dev clinfo
+  libopenmpi-dev openmpi-bin
 )
 missing=()
 for p in "${packages[@]}"; do

@@ -1,7 +1,9 @@
 // `rtcd validate` (see validate.hpp).
 #include "rtcd/app/validate.hpp"
 
+#include <algorithm>
 #include <cstdio>
+#include <optional>
 #include <fstream>
 #include <iostream>
 
@@ -11,6 +13,10 @@
 #include "rtcd/error.hpp"
 #include "rtcd/narrow_phase.hpp"
 #include "rtcd/validation/sweep.hpp"
+#include "rtcd/knobs_json.hpp"
+#include "rtcd/backend_options.hpp"
+#include "campaign.hpp"
+#include "commit.hpp"
 
 namespace rtcd::app {
 namespace {
@@ -54,9 +60,33 @@ std::vector<std::string> backends_of(const ValidateOptions& o) {
   return backends;
 }
 
-template <class OnSummary>
+// The arguments that make a campaign: what it runs, not where.
+nlohmann::json campaign_arguments(const ValidateOptions& o, const std::vector<std::string>& families,
+                                  const std::vector<std::string>& backends) {
+  nlohmann::json kinds = nlohmann::json::array();
+  for (const auto& b : backends) kinds.push_back(to_string(BackendOptions::parse(b).kind));
+  return {{"families", families}, {"backends", kinds},           {"mode", o.mode},
+          {"pairs", o.pairs},     {"seed", o.seed},              {"oracles", !o.no_oracles},
+          {"knobs", knobs_json(o.knobs.config())}};
+}
+
+// Missed and false pairs, each with what reproduces it.
+nlohmann::json failing_pairs(const validation::Family& family, const validation::RunResult& r,
+                             const validation::RunOptions& run) {
+  nlohmann::json out = nlohmann::json::array();
+  for (const auto& m : r.pairs)
+    if (m.missed_pair() || m.false_pair())
+      out.push_back({{"pair", m.index}, {"kind", m.missed_pair() ? "missed" : "false"},
+                     {"replay", validation::describe(family, m, run)}});
+  return out;
+}
+
+// Every run of `o` (families x backends), its shards where `runner` puts
+// them; `on_result` sees each on the process that reports.
+template <class OnResult>
 void run_families(const ValidateOptions& o, const std::vector<std::string>& families,
-                  const std::vector<std::string>& backends, const OnSummary& on_summary) {
+                  const std::vector<std::string>& backends, const validation::ShardRunner& runner,
+                  const OnResult& on_result) {
   validation::RunOptions run;
   run.config = o.knobs.config();
   run.mode = validation::parse_run_mode(o.mode);
@@ -69,49 +99,85 @@ void run_families(const ValidateOptions& o, const std::vector<std::string>& fami
     warn_if_self_intersecting(*family.b, "family:" + family_name + ":b");
     for (const auto& backend : backends) {
       run.backend = backend;
-      on_summary(validation::run_family(family, run).summary);
+      if (const auto r = validation::run_family(family, run, runner)) {
+        nlohmann::json j = validation::to_json(r->summary);
+        j["failing_pairs"] = failing_pairs(family, *r, run);
+        on_result(r->summary, j);
+      }
     }
   }
+}
+
+void print_header(bool oracles) {
+  std::printf("%-10s %-6s %-9s %5s %6s %7s %8s %8s %5s %6s %6s %8s %9s %8s%s\n", "family", "backend", "mode", "pairs",
+              "coll", "deep", "missed", "miss p99", "false", "mpairs", "fpairs", "depth re", "ours us", "exact us",
+              oracles ? "  FCL agr FCL blind FCLmiss GIM agr   FCL us  FCLc us   GIM us   xFCL xFCLc  xGIM" : "");
+}
+
+void print_failing(const nlohmann::json& failing) {
+  constexpr size_t kShown = 20;
+  for (size_t i = 0; i < std::min(kShown, failing.size()); ++i)
+    std::printf("%-10s %s pair: %s\n", "", failing[i]["kind"].get<std::string>().c_str(),
+                failing[i]["replay"].get<std::string>().c_str());
+  if (failing.size() > kShown) std::printf("%-10s ... and %zu more (--json lists them all)\n", "", failing.size() - kShown);
+}
+
+int run_sweep(const ValidateOptions& o, const std::vector<std::string>& families,
+              const std::vector<std::string>& backends, const Ranks& ranks) {
+  if (families.size() != 1 || backends.size() != 1) throw UsageError("--sweep needs one --family and one --backend");
+  if (!o.campaign.empty()) throw UsageError("--sweep does not run as a campaign");
+  const SpreadShards runner(ranks, nullptr);
+  const auto points = validation::sweep(validation::make_family(families[0]), backends[0], o.pairs, o.seed, &runner);
+  if (!ranks.reports()) return 0;
+  if (o.sweep_csv == "-") {
+    validation::write_csv(std::cout, points);
+  } else {
+    std::ofstream out(o.sweep_csv);
+    if (!out) throw UsageError("cannot write '" + o.sweep_csv + "'");
+    validation::write_csv(out, points);
+    std::cerr << "wrote " << points.size() << " sweep points to " << o.sweep_csv << '\n';
+  }
+  return 0;
 }
 
 }  // namespace
 
 nlohmann::json validate_json(const ValidateOptions& o) {
   nlohmann::json all = nlohmann::json::array();
-  run_families(o, families_of(o), backends_of(o),
-               [&](const validation::Summary& s) { all.push_back(validation::to_json(s)); });
+  const SpreadShards runner(one_process(), nullptr);
+  run_families(o, families_of(o), backends_of(o), runner,
+               [&](const validation::Summary&, const nlohmann::json& j) { all.push_back(j); });
   return all;
 }
 
-int run_validate(const ValidateOptions& o) {
+int run_validate(const ValidateOptions& o, const Ranks& ranks) {
   const std::vector<std::string> families = families_of(o), backends = backends_of(o);
+  if (!o.sweep_csv.empty()) return run_sweep(o, families, backends, ranks);
 
-  if (!o.sweep_csv.empty()) {
-    if (families.size() != 1 || backends.size() != 1)
-      throw UsageError("--sweep needs one --family and one --backend");
-    const auto points = validation::sweep(validation::make_family(families[0]), backends[0], o.pairs, o.seed);
-    if (o.sweep_csv == "-") {
-      validation::write_csv(std::cout, points);
-    } else {
-      std::ofstream out(o.sweep_csv);
-      if (!out) throw UsageError("cannot write '" + o.sweep_csv + "'");
-      validation::write_csv(out, points);
-      std::cerr << "wrote " << points.size() << " sweep points to " << o.sweep_csv << '\n';
-    }
-    return 0;
-  }
-
-  if (o.json) {
-    std::cout << validate_json(o).dump(2) << '\n';
-    return 0;
-  }
-  std::printf("%-10s %-6s %-9s %5s %6s %7s %8s %8s %5s %6s %6s %8s %9s %8s%s\n", "family", "backend", "mode", "pairs",
-              "coll", "deep", "missed", "miss p99", "false", "mpairs", "fpairs", "depth re", "ours us", "exact us",
-              o.no_oracles ? "" : "  FCL agr FCL blind FCLmiss GIM agr   FCL us  FCLc us   GIM us   xFCL xFCLc  xGIM");
-  run_families(o, families, backends, [](const validation::Summary& s) {
+  std::optional<Campaign> campaign;
+  if (!o.campaign.empty())
+    campaign.emplace(o.campaign, campaign_arguments(o, families, backends), o.shard_pairs, o.hours, ranks);
+  const SpreadShards runner(ranks, campaign ? &*campaign : nullptr);
+  nlohmann::json all = nlohmann::json::array();
+  if (!o.json && ranks.reports()) print_header(!o.no_oracles);
+  run_families(o, families, backends, runner, [&](const validation::Summary& s, const nlohmann::json& j) {
+    all.push_back(j);
+    if (o.json) return;
     print_row(s);  // each row as soon as its run is done
+    print_failing(j["failing_pairs"]);
     std::fflush(stdout);
   });
+  if (!ranks.reports()) return 0;
+  if (runner.unfinished()) {
+    std::fprintf(stderr, "rtcd: the campaign in '%s' stopped after %g hours with shards left: start it again with "
+                 "the same arguments to finish it\n", o.campaign.c_str(), o.hours);
+    return kCampaignUnfinished;
+  }
+  if (campaign) {
+    campaign->write_report({{"commit", kCommit}, {"runs", all}});
+    if (!o.json) std::printf("campaign complete: %s\n", (campaign->dir() / "report.json").c_str());
+  }
+  if (o.json) std::cout << all.dump(2) << '\n';
   return 0;
 }
 

@@ -1,8 +1,6 @@
 // The `rtcd` command: outputs, sequences, and exit code 2 on every bad input.
 #include <algorithm>
-#include <array>
 #include <cmath>
-#include <sys/wait.h>
 #include <unistd.h>
 #include <cstdio>
 #include <cstring>
@@ -14,25 +12,14 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "command.hpp"
 #include "rtcd/config.hpp"
 
 namespace {
 
-struct Outcome {
-  int code;
-  std::string out;
-};
+using rtcd::test::Outcome;
 
-// Runs the command with stderr folded into the output.
-Outcome run(const std::string& args) {
-  const std::string cmd = std::string(RTCD_CLI) + " " + args + " 2>&1";
-  FILE* pipe = popen(cmd.c_str(), "r");
-  std::string out;
-  std::array<char, 4096> buf;
-  while (size_t n = fread(buf.data(), 1, buf.size(), pipe)) out.append(buf.data(), n);
-  const int status = pclose(pipe);
-  return {WIFEXITED(status) ? WEXITSTATUS(status) : -1, out};
-}
+Outcome run(const std::string& args) { return rtcd::test::run_command(args); }
 
 const std::string data = std::string(RTCD_DATA_DIR) + "/meshes/";
 

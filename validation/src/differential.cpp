@@ -2,6 +2,7 @@
 #include "rtcd/validation/differential.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <iomanip>
 #include <numbers>
@@ -33,7 +34,7 @@ struct OurRay {
 // distance to the nearest surface (Config::nearest_surface) or the first
 // exit along the ray.
 void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>& ours, bool target_closed,
-           bool nearest_surface, double epsilon, PairMetrics& m, double& depth_error_sum) {
+           bool nearest_surface, double epsilon, PairMetrics& m) {
   size_t inside = 0;
   for (size_t v = 0; v < exact.size(); ++v) {
     const oracle::ExactRay& e = exact[v];
@@ -43,7 +44,7 @@ void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>
       const double error = std::abs(ours[v].depth - expected);
       m.max_depth_error = std::max(m.max_depth_error, error);
       m.max_relative_depth_error = std::max(m.max_relative_depth_error, error / std::max(expected, epsilon));
-      depth_error_sum += error;
+      m.depth_error_sum += error;
       ++m.depth_checked;
     }
     if (!target_closed) continue;  // no inside/outside claims on an open target
@@ -69,7 +70,7 @@ void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>
 void judge_truth(const StepResult& step, const PairResult& pr, const oracle::ExactShape& exact_a,
                  const oracle::ExactShape& exact_b, const std::vector<oracle::ExactRay>& rays_ab,
                  const std::vector<oracle::ExactRay>& rays_ba, const PosePair& poses, double epsilon,
-                 double allowance, PairMetrics& m, std::vector<double>& ratios, std::vector<double>& angles) {
+                 double allowance, PairMetrics& m) {
   for (const Contact& c : step.contacts_of(pr)) {
     const bool into_b = c.source == Side::a;
     const oracle::ExactShape& target = into_b ? exact_b : exact_a;
@@ -89,7 +90,7 @@ void judge_truth(const StepResult& step, const PairResult& pr, const oracle::Exa
     if (!(truth > epsilon) || !(solver > 0.0)) continue;
     const double ratio = solver / truth;
     m.max_truth_ratio = std::max(m.max_truth_ratio, ratio);
-    ratios.push_back(ratio);
+    m.truth_ratios.push_back(ratio);
     // The way to the nearest surface point; where several are as near (the
     // middle of a slab), the one the contact names if it is one of them.
     const auto angle = [&](const Eigen::Vector3d& way) {
@@ -99,7 +100,7 @@ void judge_truth(const StepResult& step, const PairResult& pr, const oracle::Exa
     if (degrees > 1.0 && c.depth <= truth + epsilon &&
         target.distance(pose.inverse().apply(c.origin + c.direction * c.depth)) <= epsilon)
       degrees = angle(c.direction);
-    angles.push_back(degrees);
+    m.push_angles.push_back(degrees);
   }
 }
 
@@ -142,157 +143,140 @@ struct References {
   std::optional<oracle::GimpactShape> gimpact_a, gimpact_b;
 };
 
-// One run_family: our backend steps every pair, then each pair is judged
-// and added to the summary, one method per job.
-class FamilyRun {
+double epsilon_of(const Family& family, const RunOptions& options) {
+  return options.epsilon_scale * std::max(family.a->radius(), family.b->radius());
+}
+
+// One shard: our backend steps its pairs, then each pair is judged, one
+// method per job.
+class ShardRun {
  public:
-  FamilyRun(const Family& family, const RunOptions& options)
+  ShardRun(const Family& family, const RunOptions& options, size_t first, size_t count)
       : family(family),
         options(options),
         config(run_config(options)),
-        epsilon(options.epsilon_scale * std::max(family.a->radius(), family.b->radius())),
+        epsilon(epsilon_of(family, options)),
         // Over-reports: deeper than 1.25x the truth plus 1e-3 of the smaller body's radius.
-        allowance(1e-3 * std::min(family.a->radius(), family.b->radius())) {}
+        allowance(1e-3 * std::min(family.a->radius(), family.b->radius())),
+        first(first),
+        count(count) {}
 
-  RunResult run() {
-    describe_run();
+  Shard run() {
+    shard.first = first;
     step_ours();
     const References references(family, options.with_oracles);
     ours_a.resize(family.a->sources().origins.size());
     ours_b.resize(family.b->sources().origins.size());
-    for (size_t i = 0; i < options.pairs; ++i) {
-      const PairMetrics m = judge_pair(i, references);
-      add_to_summary(m);
-      result.pairs.push_back(m);
-    }
-    finish_summary();
-    return std::move(result);
+    shard.pairs.reserve(count);
+    for (size_t k = 0; k < count; ++k) shard.pairs.push_back(judge_pair(k, references));
+    return std::move(shard);
   }
 
  private:
-  void describe_run();
-  // Our backend: every pair in one batch, as a host would step them.
+  // Our backend: every pair of the shard in one batch, as a host would step them.
   void step_ours();
   // Iterative runs: the steps before the judged one; the seconds of those timed.
   double step_through_motions(NarrowPhase& narrow, std::span<const BodyPair> pairs);
-  PairMetrics judge_pair(size_t i, const References& references);
-  void mark_our_rays(size_t i, PairMetrics& m);
+  PairMetrics judge_pair(size_t k, const References& references);
+  void mark_our_rays(size_t k, PairMetrics& m);
   void count_crossings(const References& references, PairMetrics& m);
-  void run_oracles(size_t i, const References& references, PairMetrics& m);
-  void add_to_summary(const PairMetrics& m);
-  void finish_summary();
+  void run_oracles(const References& references, PairMetrics& m);
 
   const Family& family;
   const RunOptions& options;
   const Config config;
   const double epsilon, allowance;
-  RunResult result;
-  Summary& s = result.summary;
-  std::vector<PosePair> judged;
-  StepResult step;  // the judged one
+  const size_t first, count;
+  Shard shard;
+  std::vector<PosePair> judged;  // by pair of the shard
+  StepResult step;               // the judged one
   // What was tracked going into the judged step (iterative runs).
   std::vector<std::vector<std::pair<Side, uint32_t>>> tracked;
   std::vector<size_t> full_steps;
   std::vector<OurRay> ours_a, ours_b;  // of the pair being judged
-  double depth_error_sum = 0.0, ccd_difference_sum = 0.0, ccd_ratio_sum = 0.0;
-  std::vector<double> missed_rates, truth_ratios, push_angles;
 };
 
-void FamilyRun::describe_run() {
-  s.family = family.name;
-  s.mode = options.mode;
-  s.config = config;
-  s.pairs = options.pairs;
-  s.seed = options.seed;
-  s.epsilon = epsilon;
-  s.with_oracles = options.with_oracles;
-  if (options.mode == RunMode::iterative) s.motion_steps = options.pairs * options.motion_steps;
-}
-
-void FamilyRun::step_ours() {
+void ShardRun::step_ours() {
   BackendOptions backend = BackendOptions::parse(options.backend);
   if (options.single_thread) backend.threads = 1;
   auto narrow = make_narrow_phase(backend, config);
-  s.backend = narrow->name();
+  shard.backend = narrow->name();
   const ShapeId sa = narrow->add_shape(family.a), sb = narrow->add_shape(family.b);
-  judged.resize(options.pairs);
-  std::vector<BodyPair> pairs(options.pairs);
-  for (size_t i = 0; i < options.pairs; ++i) {
-    judged[i] = random_poses(family, options.seed, i);
-    pairs[i] = {narrow->add_body(sa, judged[i].a), narrow->add_body(sb, judged[i].b)};
+  judged.resize(count);
+  std::vector<BodyPair> pairs(count);
+  for (size_t k = 0; k < count; ++k) {
+    judged[k] = random_poses(family, options.seed, first + k);
+    pairs[k] = {narrow->add_body(sa, judged[k].a), narrow->add_body(sb, judged[k].b)};
   }
-  tracked.resize(options.pairs);
-  full_steps.assign(options.pairs, 0);
+  tracked.resize(count);
+  full_steps.assign(count, 0);
   // Of the timed steps: the one full step, or every step after it.
   double seconds = options.mode == RunMode::iterative ? step_through_motions(*narrow, pairs) : 0.0;
   const auto t0 = Clock::now();
   narrow->detect(pairs, step);
-  seconds += seconds_since(t0);
-  // Iterative runs: the mean over the motion steps, full steps they cause included.
-  s.time_ours = seconds / double(options.pairs * (options.mode == RunMode::iterative ? options.motion_steps : 1));
-
-  s.vertex_rays = step.stats.rays_full + step.stats.rays_predictive + step.stats.rays_iterative;
-  s.edge_rays = step.stats.edge_rays;
-  s.edges_tested = step.stats.edges_tested;
+  shard.seconds_ours = seconds + seconds_since(t0);
+  shard.vertex_rays = step.stats.rays_full + step.stats.rays_predictive + step.stats.rays_iterative;
+  shard.edge_rays = step.stats.edge_rays;
+  shard.edges_tested = step.stats.edges_tested;
 }
 
-double FamilyRun::step_through_motions(NarrowPhase& narrow, std::span<const BodyPair> pairs) {
+double ShardRun::step_through_motions(NarrowPhase& narrow, std::span<const BodyPair> pairs) {
   double seconds = 0.0;
   narrow.detect(pairs, step);
-  for (size_t k = 0; k < options.motion_steps; ++k) {
-    if (k > 0) {
+  for (size_t s = 0; s < options.motion_steps; ++s) {
+    if (s > 0) {
       const auto t = Clock::now();
       narrow.detect(pairs, step);
       seconds += seconds_since(t);
-      for (size_t i = 0; i < options.pairs; ++i) full_steps[i] += step.pairs[i].mode == PairMode::full;
+      for (size_t k = 0; k < count; ++k) full_steps[k] += step.pairs[k].mode == PairMode::full;
     }
-    if (k + 1 == options.motion_steps) {
-      for (size_t i = 0; i < options.pairs; ++i) {
-        for (const Contact& c : step.contacts_of(step.pairs[i]))
-          if (c.kind == ContactKind::vertex) tracked[i].push_back({c.source, c.vertex});
-        for (const PredictiveRay& p : step.predictive_of(step.pairs[i])) tracked[i].push_back({p.source, p.vertex});
+    if (s + 1 == options.motion_steps) {
+      for (size_t k = 0; k < count; ++k) {
+        for (const Contact& c : step.contacts_of(step.pairs[k]))
+          if (c.kind == ContactKind::vertex) tracked[k].push_back({c.source, c.vertex});
+        for (const PredictiveRay& p : step.predictive_of(step.pairs[k])) tracked[k].push_back({p.source, p.vertex});
       }
     }
-    for (size_t i = 0; i < options.pairs; ++i) {
-      judged[i] = moved(family, judged[i], family.step_motion(), options.seed, i);
-      narrow.set_pose(pairs[i].a, judged[i].a);
-      narrow.set_pose(pairs[i].b, judged[i].b);
+    for (size_t k = 0; k < count; ++k) {
+      judged[k] = moved(family, judged[k], family.step_motion(), options.seed, first + k);
+      narrow.set_pose(pairs[k].a, judged[k].a);
+      narrow.set_pose(pairs[k].b, judged[k].b);
     }
   }
   return seconds;
 }
 
-PairMetrics FamilyRun::judge_pair(size_t i, const References& references) {
+PairMetrics ShardRun::judge_pair(size_t k, const References& references) {
   const oracle::ExactShape& exact_a = references.exact_a;
   const oracle::ExactShape& exact_b = references.exact_b;
   PairMetrics m;
-  m.index = i;
-  m.poses = judged[i];
-  const PairResult& pr = step.pairs[i];
+  m.index = first + k;
+  m.poses = judged[k];
+  const PairResult& pr = step.pairs[k];
   m.iterative = pr.mode == PairMode::iterative;
-  m.full_steps = full_steps[i] + (options.mode == RunMode::iterative && !m.iterative);
+  m.full_steps = full_steps[k] + (options.mode == RunMode::iterative && !m.iterative);
   m.colliding_ours = pr.colliding;
-  mark_our_rays(i, m);
+  mark_our_rays(k, m);
 
   const auto t = Clock::now();
   const auto rays_ab = exact_b.rays_from(*family.a, m.poses.a, m.poses.b, epsilon);
   const auto rays_ba = exact_a.rays_from(*family.b, m.poses.b, m.poses.a, epsilon);
-  s.time_exact += seconds_since(t);
-  judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
-  judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m, depth_error_sum);
-  judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, allowance, m, truth_ratios, push_angles);
+  m.seconds_exact += seconds_since(t);
+  judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m);
+  judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m);
+  judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, allowance, m);
   count_crossings(references, m);
   m.colliding_exact = m.deep > 0 || m.crossing_deep > 0;
-  if (options.with_oracles) run_oracles(i, references, m);
+  if (options.with_oracles) run_oracles(references, m);
   return m;
 }
 
-// Our rays of pair i, per origin: its depth, and whether it was tracked.
-void FamilyRun::mark_our_rays(size_t i, PairMetrics& m) {
+// Our rays of pair k, per origin: its depth, and whether it was tracked.
+void ShardRun::mark_our_rays(size_t k, PairMetrics& m) {
   std::fill(ours_a.begin(), ours_a.end(), OurRay{});
   std::fill(ours_b.begin(), ours_b.end(), OurRay{});
-  for (const auto& [side, vertex] : tracked[i]) (side == Side::a ? ours_a : ours_b)[vertex].tracked = true;
-  for (const Contact& c : step.contacts_of(step.pairs[i])) {
+  for (const auto& [side, vertex] : tracked[k]) (side == Side::a ? ours_a : ours_b)[vertex].tracked = true;
+  for (const Contact& c : step.contacts_of(step.pairs[k])) {
     // Edge contacts are judged by pair (crossing_deep), vertex rays one by one.
     if (c.kind == ContactKind::vertex) (c.source == Side::a ? ours_a : ours_b)[c.vertex].depth = c.depth;
     m.our_projected_depth = std::max(m.our_projected_depth, c.projected_depth);
@@ -300,7 +284,7 @@ void FamilyRun::mark_our_rays(size_t i, PairMetrics& m) {
 }
 
 // Edge crossings, and a sphere's cap in a sphere or a box, in closed form.
-void FamilyRun::count_crossings(const References& references, PairMetrics& m) {
+void ShardRun::count_crossings(const References& references, PairMetrics& m) {
   const auto t = Clock::now();
   for (auto depths : {references.exact_b.edge_depths(*family.a, m.poses.a, m.poses.b),
                       references.exact_a.edge_depths(*family.b, m.poses.b, m.poses.a)})
@@ -313,35 +297,70 @@ void FamilyRun::count_crossings(const References& references, PairMetrics& m) {
     m.crossing_deep += depth > epsilon;
     m.crossing_any += depth > 0.0;
   }
-  s.time_exact += seconds_since(t);
+  m.seconds_exact += seconds_since(t);
 }
 
-void FamilyRun::run_oracles(size_t i, const References& references, PairMetrics& m) {
+void ShardRun::run_oracles(const References& references, PairMetrics& m) {
   auto t = Clock::now();
   m.fcl = references.fcl_a->collide(m.poses.a, *references.fcl_b, m.poses.b).colliding;
-  s.time_fcl += seconds_since(t);
+  m.seconds_fcl = seconds_since(t);
   // All contacts, the query comparable to ours.
   t = Clock::now();
   references.fcl_a->collide(m.poses.a, *references.fcl_b, m.poses.b, true, 1'000'000);
-  s.time_fcl_contacts += seconds_since(t);
-  if (i < options.gimpact_pairs) {
+  m.seconds_fcl_contacts = seconds_since(t);
+  if (m.index < options.gimpact_pairs) {
     t = Clock::now();
     m.gimpact = references.gimpact_a->collide(m.poses.a, *references.gimpact_b, m.poses.b).colliding;
-    s.time_gimpact += seconds_since(t);
+    m.seconds_gimpact = seconds_since(t);
     m.has_gimpact = true;
-    ++s.gimpact_runs;
   }
   if (family.convex) {
     t = Clock::now();
     const auto p = oracle::ccd_penetration(*family.a, m.poses.a, *family.b, m.poses.b);
-    s.time_ccd += seconds_since(t);
+    m.seconds_ccd = seconds_since(t);
     m.has_ccd = true;
     m.ccd = p.colliding;
     m.ccd_depth = p.depth;
   }
 }
 
-void FamilyRun::add_to_summary(const PairMetrics& m) {
+// A run's pairs, folded into its summary one by one in pair order.
+class SummaryFold {
+ public:
+  SummaryFold(const Family& family, const RunOptions& options) : options(options) {
+    s.family = family.name;
+    s.mode = options.mode;
+    s.config = run_config(options);
+    s.pairs = options.pairs;
+    s.seed = options.seed;
+    s.epsilon = epsilon_of(family, options);
+    s.with_oracles = options.with_oracles;
+    if (options.mode == RunMode::iterative) s.motion_steps = options.pairs * options.motion_steps;
+  }
+  void add(const Shard& shard);
+  void add(const PairMetrics& m);
+  Summary finish();
+
+ private:
+  const RunOptions& options;
+  Summary s;
+  double seconds_ours = 0.0, depth_error_sum = 0.0, ccd_difference_sum = 0.0, ccd_ratio_sum = 0.0;
+  std::vector<double> missed_rates, truth_ratios, push_angles;
+};
+
+void SummaryFold::add(const Shard& shard) {
+  if (s.backend.empty()) s.backend = shard.backend;
+  if (shard.backend != s.backend)
+    throw UsageError("a shard of pairs from " + std::to_string(shard.first) + " ran on backend '" + shard.backend +
+                     "', the others on '" + s.backend + "'");
+  s.vertex_rays += shard.vertex_rays;
+  s.edge_rays += shard.edge_rays;
+  s.edges_tested += shard.edges_tested;
+  seconds_ours += shard.seconds_ours;
+  for (const PairMetrics& m : shard.pairs) add(m);
+}
+
+void SummaryFold::add(const PairMetrics& m) {
   s.iterative_pairs += m.iterative;
   s.full_steps += m.full_steps;
   s.deep += m.deep;
@@ -350,17 +369,26 @@ void FamilyRun::add_to_summary(const PairMetrics& m) {
   s.far_outside += m.far_outside;
   s.false_rays += m.false_rays;
   s.depth_checked += m.depth_checked;
+  depth_error_sum += m.depth_error_sum;
   s.truth_checked += m.truth_checked;
   s.over_reports += m.over_reports;
+  truth_ratios.insert(truth_ratios.end(), m.truth_ratios.begin(), m.truth_ratios.end());
+  push_angles.insert(push_angles.end(), m.push_angles.begin(), m.push_angles.end());
   s.max_depth_error = std::max(s.max_depth_error, m.max_depth_error);
   s.max_relative_depth_error = std::max(s.max_relative_depth_error, m.max_relative_depth_error);
   if (m.deep) missed_rates.push_back(m.missed_rate());
   s.colliding += m.colliding_exact;
   s.crossing_pairs += m.colliding_exact && m.deep == 0;
-  s.missed_pairs += m.colliding_exact && !m.colliding_ours;
-  s.false_pairs += m.colliding_ours && m.inside_any == 0 && m.crossing_any == 0;
+  s.missed_pairs += m.missed_pair();
+  s.false_pairs += m.false_pair();
   s.contained += m.contained && m.colliding_exact;
+  s.time_exact += m.seconds_exact;
   if (!options.with_oracles) return;
+  s.time_fcl += m.seconds_fcl;
+  s.time_fcl_contacts += m.seconds_fcl_contacts;
+  s.time_gimpact += m.seconds_gimpact;
+  s.time_ccd += m.seconds_ccd;
+  s.gimpact_runs += m.has_gimpact;
   if (m.colliding_exact && !m.contained) {
     ++s.fcl_checked;
     s.fcl_agree += m.fcl;
@@ -368,7 +396,7 @@ void FamilyRun::add_to_summary(const PairMetrics& m) {
     s.gimpact_agree += m.has_gimpact && m.gimpact;
   }
   s.fcl_blind_contained += m.contained && m.colliding_exact && !m.fcl;
-  s.fcl_missed_pairs += m.fcl && m.colliding_exact && !m.colliding_ours;
+  s.fcl_missed_pairs += m.fcl && m.missed_pair();
   s.fcl_touching_pairs += m.fcl && !m.colliding_exact && !m.colliding_ours;
   if (m.has_ccd && m.ccd && m.colliding_ours) {
     ++s.ccd_pairs;
@@ -378,8 +406,10 @@ void FamilyRun::add_to_summary(const PairMetrics& m) {
 }
 
 // Times per pair, means and percentiles, once every pair is in.
-void FamilyRun::finish_summary() {
+Summary SummaryFold::finish() {
   const double n = double(options.pairs);
+  // Iterative runs: the mean over the motion steps, full steps they cause included.
+  s.time_ours = seconds_ours / (n * double(options.mode == RunMode::iterative ? options.motion_steps : 1));
   s.time_exact /= n;
   s.time_fcl /= n;
   s.time_fcl_contacts /= n;
@@ -399,6 +429,73 @@ void FamilyRun::finish_summary() {
     s.ccd_mean_abs_difference = ccd_difference_sum / double(s.ccd_pairs);
     s.ccd_mean_ratio = ccd_ratio_sum / double(s.ccd_pairs);
   }
+  return s;
+}
+
+// Every field a shard's JSON holds for a pair, named once for both ways.
+template <class Metrics, class Visit>
+void visit_fields(Metrics& m, Visit&& visit) {
+  visit("index", m.index);
+  visit("iterative", m.iterative);
+  visit("full_steps", m.full_steps);
+  visit("deep", m.deep);
+  visit("missed", m.missed);
+  visit("missed_untracked", m.missed_untracked);
+  visit("far_outside", m.far_outside);
+  visit("false_rays", m.false_rays);
+  visit("depth_checked", m.depth_checked);
+  visit("max_depth_error", m.max_depth_error);
+  visit("max_relative_depth_error", m.max_relative_depth_error);
+  visit("inside_any", m.inside_any);
+  visit("crossing_deep", m.crossing_deep);
+  visit("crossing_any", m.crossing_any);
+  visit("colliding_exact", m.colliding_exact);
+  visit("colliding_ours", m.colliding_ours);
+  visit("contained", m.contained);
+  visit("fcl", m.fcl);
+  visit("has_gimpact", m.has_gimpact);
+  visit("gimpact", m.gimpact);
+  visit("has_ccd", m.has_ccd);
+  visit("ccd", m.ccd);
+  visit("ccd_depth", m.ccd_depth);
+  visit("our_projected_depth", m.our_projected_depth);
+  visit("truth_checked", m.truth_checked);
+  visit("over_reports", m.over_reports);
+  visit("max_truth_ratio", m.max_truth_ratio);
+  visit("depth_error_sum", m.depth_error_sum);
+  visit("truth_ratios", m.truth_ratios);
+  visit("push_angles", m.push_angles);
+  visit("seconds_exact", m.seconds_exact);
+  visit("seconds_fcl", m.seconds_fcl);
+  visit("seconds_fcl_contacts", m.seconds_fcl_contacts);
+  visit("seconds_gimpact", m.seconds_gimpact);
+  visit("seconds_ccd", m.seconds_ccd);
+}
+
+template <class T>
+T field(const nlohmann::json& j, const char* key, const std::string& where) {
+  const auto it = j.find(key);
+  if (it == j.end()) throw UsageError(where + " has no '" + key + "'");
+  try {
+    return it->get<T>();
+  } catch (const nlohmann::json::exception&) {
+    throw UsageError(where + ": '" + key + "' is not what it should be (" + it->dump() + ")");
+  }
+}
+
+nlohmann::json pose_json(const Pose& p) {
+  return {p.position.x(), p.position.y(), p.position.z(), p.orientation.w(),
+          p.orientation.x(), p.orientation.y(), p.orientation.z()};
+}
+
+Pose pose_from_json(const nlohmann::json& j, const std::string& where) {
+  if (!j.is_array() || j.size() != 7) throw UsageError(where + ": a pose is 7 numbers");
+  std::array<double, 7> v;
+  for (size_t i = 0; i < 7; ++i) {
+    if (!j[i].is_number()) throw UsageError(where + ": a pose is 7 numbers");
+    v[i] = j[i].get<double>();
+  }
+  return {{v[0], v[1], v[2]}, Eigen::Quaterniond(v[3], v[4], v[5], v[6])};
 }
 
 }  // namespace
@@ -411,7 +508,42 @@ RunMode parse_run_mode(const std::string& text) {
   throw UsageError("unknown validation mode '" + text + "' (expected full or iterative)");
 }
 
-RunResult run_family(const Family& family, const RunOptions& options) { return FamilyRun(family, options).run(); }
+Shard run_shard(const Family& family, const RunOptions& options, size_t first, size_t count) {
+  if (count == 0 || first + count > options.pairs)
+    throw UsageError("a shard of pairs " + std::to_string(first) + " to " + std::to_string(first + count) +
+                     " does not lie in a run of " + std::to_string(options.pairs) + " pairs");
+  return ShardRun(family, options, first, count).run();
+}
+
+RunResult summarize(const Family& family, const RunOptions& options, std::span<const Shard> shards) {
+  SummaryFold fold(family, options);
+  RunResult result;
+  result.pairs.reserve(options.pairs);
+  for (const Shard& shard : shards) {
+    for (size_t k = 0; k < shard.pairs.size(); ++k)
+      if (shard.first != result.pairs.size() || shard.pairs[k].index != shard.first + k)
+        throw UsageError("the shards of a run of " + std::to_string(options.pairs) + " pairs skip or repeat pair " +
+                         std::to_string(result.pairs.size() + k));
+    fold.add(shard);
+    result.pairs.insert(result.pairs.end(), shard.pairs.begin(), shard.pairs.end());
+  }
+  if (result.pairs.size() != options.pairs)
+    throw UsageError("the shards of a run of " + std::to_string(options.pairs) + " pairs hold " +
+                     std::to_string(result.pairs.size()));
+  result.summary = fold.finish();
+  return result;
+}
+
+RunResult run_family(const Family& family, const RunOptions& options) {
+  const Shard all = run_shard(family, options, 0, options.pairs);
+  return summarize(family, options, {&all, 1});
+}
+
+std::optional<RunResult> run_family(const Family& family, const RunOptions& options, const ShardRunner& runner) {
+  const auto shards = runner.run(family, options);
+  if (!shards) return std::nullopt;
+  return summarize(family, options, *shards);
+}
 
 nlohmann::json to_json(const Summary& s) {
   return {{"family", s.family},
@@ -453,6 +585,50 @@ nlohmann::json to_json(const Summary& s) {
           {"ccd", {{"pairs", s.ccd_pairs}, {"mean_abs_difference", s.ccd_mean_abs_difference}, {"mean_ratio", s.ccd_mean_ratio}}},
           {"seconds_per_pair", {{"ours", s.time_ours}, {"exact", s.time_exact}, {"fcl", s.time_fcl}, {"fcl_contacts", s.time_fcl_contacts},
                                 {"gimpact", s.time_gimpact}, {"ccd", s.time_ccd}}}};
+}
+
+nlohmann::json to_json(const Shard& shard) {
+  nlohmann::json pairs = nlohmann::json::array();
+  for (const PairMetrics& m : shard.pairs) {
+    nlohmann::json j;
+    visit_fields(m, [&](const char* key, const auto& value) { j[key] = value; });
+    j["poses"] = {pose_json(m.poses.a), pose_json(m.poses.b)};
+    pairs.push_back(std::move(j));
+  }
+  return {{"first", shard.first},
+          {"backend", shard.backend},
+          {"vertex_rays", shard.vertex_rays},
+          {"edge_rays", shard.edge_rays},
+          {"edges_tested", shard.edges_tested},
+          {"seconds_ours", shard.seconds_ours},
+          {"pairs", std::move(pairs)}};
+}
+
+Shard shard_from_json(const nlohmann::json& j) {
+  if (!j.is_object()) throw UsageError("a shard is a JSON object");
+  Shard shard;
+  shard.first = field<size_t>(j, "first", "the shard");
+  const std::string where = "the shard from pair " + std::to_string(shard.first);
+  shard.backend = field<std::string>(j, "backend", where);
+  shard.vertex_rays = field<size_t>(j, "vertex_rays", where);
+  shard.edge_rays = field<size_t>(j, "edge_rays", where);
+  shard.edges_tested = field<size_t>(j, "edges_tested", where);
+  shard.seconds_ours = field<double>(j, "seconds_ours", where);
+  const auto pairs = field<nlohmann::json>(j, "pairs", where);
+  if (!pairs.is_array()) throw UsageError(where + ": 'pairs' is not an array");
+  for (const nlohmann::json& p : pairs) {
+    const std::string pair_where = where + ", pair " + std::to_string(shard.pairs.size());
+    if (!p.is_object()) throw UsageError(pair_where + " is not an object");
+    PairMetrics m;
+    visit_fields(m, [&](const char* key, auto& value) {
+      value = field<std::remove_reference_t<decltype(value)>>(p, key, pair_where);
+    });
+    const auto poses = field<nlohmann::json>(p, "poses", pair_where);
+    if (!poses.is_array() || poses.size() != 2) throw UsageError(pair_where + ": 'poses' is not two poses");
+    m.poses = {pose_from_json(poses[0], pair_where), pose_from_json(poses[1], pair_where)};
+    shard.pairs.push_back(std::move(m));
+  }
+  return shard;
 }
 
 std::string describe(const Family& family, const PairMetrics& m, const RunOptions& o) {

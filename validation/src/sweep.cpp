@@ -16,7 +16,8 @@ std::string text(double v) {
 
 }  // namespace
 
-std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, size_t pairs, uint64_t seed) {
+std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, size_t pairs, uint64_t seed,
+                              const ShardRunner* runner) {
   struct Setting {
     std::string knob, value;
     RunMode mode;
@@ -47,7 +48,8 @@ std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, 
     o.seed = seed;
     o.with_oracles = false;
     s.apply(o.config);
-    points.push_back({s.knob, s.value, s.knob == "mode" && s.value == "iterative", run_family(family, o).summary});
+    const auto run = runner ? run_family(family, o, *runner) : run_family(family, o);
+    if (run) points.push_back({s.knob, s.value, s.knob == "mode" && s.value == "iterative", run->summary});
   }
   return points;
 }

@@ -6,6 +6,8 @@
 
 #include <cstdint>
 #include <limits>
+#include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -69,7 +71,18 @@ struct PairMetrics {
   // allows (Summary::over_reports), and the largest solver depth over it.
   size_t truth_checked = 0, over_reports = 0;
   double max_truth_ratio = 0.0;
+  // What the pair adds to the run's means and percentiles, kept with it so
+  // that a run cut into shards folds to the same summary (summarize()):
+  // the summed depth errors, each contact's solver depth over the truth and
+  // push angle (those deeper than epsilon), the references' seconds.
+  double depth_error_sum = 0.0;
+  std::vector<double> truth_ratios, push_angles;
+  double seconds_exact = 0.0, seconds_fcl = 0.0, seconds_fcl_contacts = 0.0, seconds_gimpact = 0.0,
+         seconds_ccd = 0.0;
   double missed_rate() const { return deep ? double(missed) / double(deep) : 0.0; }
+  bool missed_pair() const { return colliding_exact && !colliding_ours; }
+  // rtcd calls it colliding with nothing of either body in the other at any depth.
+  bool false_pair() const { return colliding_ours && inside_any == 0 && crossing_any == 0; }
 };
 
 struct Summary {
@@ -128,7 +141,47 @@ struct RunResult {
   std::vector<PairMetrics> pairs;
 };
 
+// The pairs [first, first + pairs.size()) of a run, stepped by our backend
+// in one batch and judged. Each pair's poses depend on the seed, the family
+// and its index alone, so any cut of a run into shards judges the same pairs
+// the same way.
+struct Shard {
+  size_t first = 0;
+  std::string backend;  // the name the backend gave itself
+  std::vector<PairMetrics> pairs;
+  size_t vertex_rays = 0, edge_rays = 0, edges_tested = 0;  // the judged step's work
+  double seconds_ours = 0.0;                                // our timed steps
+};
+
+Shard run_shard(const Family& family, const RunOptions& options, size_t first, size_t count);
+
+// A run's summary from all of its shards, given in pair order: one fold over
+// the pairs, so every count, rate and bound is the same however the run was
+// cut (the seconds are summed over the shards). Throws UsageError when
+// the shards do not cover the run's pairs exactly once, in order.
+RunResult summarize(const Family& family, const RunOptions& options, std::span<const Shard> shards);
+
+// The whole run in one shard.
 RunResult run_family(const Family& family, const RunOptions& options);
+
+// Where a run's shards run and how it is cut: across the ranks of an MPI
+// job, or into a campaign's directory (rtcd::app).
+class ShardRunner {
+ public:
+  virtual ~ShardRunner() = default;
+  // Every shard of the run in pair order on the process that reports;
+  // nothing on the others, and nothing when the run was stopped unfinished.
+  virtual std::optional<std::vector<Shard>> run(const Family& family, const RunOptions& options) const = 0;
+};
+
+// run_family with the shards run where `runner` puts them: the summary on
+// the process that reports, nothing elsewhere.
+std::optional<RunResult> run_family(const Family& family, const RunOptions& options, const ShardRunner& runner);
+
+// A shard as JSON, every double exactly, and back (UsageError naming
+// what is missing or malformed).
+nlohmann::json to_json(const Shard& shard);
+Shard shard_from_json(const nlohmann::json& json);
 
 nlohmann::json to_json(const Summary& summary);
 // One pair at full precision, and the command that replays it.

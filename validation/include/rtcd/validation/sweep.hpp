@@ -18,8 +18,11 @@ struct SweepPoint {
 };
 
 // max walk steps, displacement threshold, distance extension, predictive
-// on/off, each in iterative runs, plus the full-tracing baseline.
-std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, size_t pairs, uint64_t seed);
+// on/off, each in iterative runs, plus the full-tracing baseline. With a
+// runner, each point's shards run where it puts them, and the points come
+// back on the process that reports only.
+std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, size_t pairs, uint64_t seed,
+                              const ShardRunner* runner = nullptr);
 
 void write_csv(std::ostream& out, const std::vector<SweepPoint>& points);
 

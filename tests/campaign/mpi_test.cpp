@@ -1,0 +1,53 @@
+// `mpirun -n N rtcd validate` for N = 1, 2, 3: every count, rate and bound
+// in the JSON equals the one-process run's, with and without a campaign,
+// and a campaign whose ranks all died resumes on another number of ranks.
+#include <unistd.h>
+
+#include <filesystem>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "validate_json.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using rtcd::test::kRun;
+using rtcd::test::Outcome;
+using rtcd::test::run_command;
+using rtcd::test::validate_json;
+
+// mpirun as root, more ranks than cores.
+std::string mpirun(int ranks) {
+  return std::string("OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 ") + RTCD_MPIEXEC + " -n " +
+         std::to_string(ranks) + " --oversubscribe ";
+}
+
+class Ranks : public ::testing::TestWithParam<int> {};
+
+TEST_P(Ranks, ReportWhatOneProcessDoes) {
+  for (const std::string family : {"convex", "concave"})
+    for (const std::string mode : {"full", "iterative"}) {
+      const std::string args = "--family " + family + " --backend embree --pairs 23 --seed 3 --mode " + mode;
+      const nlohmann::json one = validate_json(args);
+      ASSERT_EQ(one.size(), 1u);
+      EXPECT_GT(one[0]["deep_origins"].get<size_t>(), 0u);
+      EXPECT_EQ(validate_json(args, mpirun(GetParam())), one) << family << ' ' << mode;
+    }
+}
+
+TEST_P(Ranks, ResumeACampaignThatLostARank) {
+  const fs::path dir = fs::temp_directory_path() / ("rtcd_mpi_campaign_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  const std::string args = kRun + " --mode full --no-oracles --campaign " + dir.string() + " --shard-pairs 3";
+  // Every rank dies after its first shard: the job is lost.
+  const Outcome r = run_command("validate " + args, "RTCD_CAMPAIGN_KILL=after:1 " + mpirun(GetParam()));
+  EXPECT_NE(r.code, 0) << r.out;
+  EXPECT_EQ(validate_json(args, mpirun(GetParam() % 3 + 1)), validate_json(kRun + " --mode full --no-oracles"));
+  fs::remove_all(dir);
+}
+
+INSTANTIATE_TEST_SUITE_P(Mpi, Ranks, ::testing::Values(1, 2, 3));
+
+}  // namespace
