@@ -34,7 +34,7 @@ RESULTS = os.path.join("docs", "results")
 # The folders, in the order docs/results/README.md lists them.
 FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "opencl", "threshold-sweep",
            "accuracy-sweep",
-           "edges", "python"]
+           "edges", "python", "campaign"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
 
