@@ -1,9 +1,12 @@
 // `mpirun -n N rtcd validate` for N = 1, 2, 3: every count, rate and bound
-// in the JSON equals the one-process run's, with and without a campaign,
-// and a campaign whose ranks all died resumes on another number of ranks.
+// in the JSON (and the sweep's CSV) equals the one-process run's, with and
+// without a campaign, and a campaign whose ranks all died resumes on
+// another number of ranks.
 #include <unistd.h>
 
+#include <algorithm>
 #include <filesystem>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -35,6 +38,29 @@ TEST_P(Ranks, ReportWhatOneProcessDoes) {
       EXPECT_GT(one[0]["deep_origins"].get<size_t>(), 0u);
       EXPECT_EQ(validate_json(args, mpirun(GetParam())), one) << family << ' ' << mode;
     }
+}
+
+// The sweep's CSV less its seconds column (the eighth).
+std::string sweep_without_seconds(const std::string& prefix) {
+  const Outcome r = run_command("validate --sweep --family convex --backend embree --pairs 20", prefix);
+  EXPECT_EQ(r.code, 0) << r.out;
+  std::istringstream in(r.out);
+  std::string kept;
+  for (std::string line; std::getline(in, line);) {
+    if (line.find(',') == std::string::npos) continue;  // mpirun's notes
+    std::istringstream fields(line);
+    std::string field;
+    for (int i = 1; std::getline(fields, field, ','); ++i)
+      if (i != 8) kept += field + ',';
+    kept += '\n';
+  }
+  return kept;
+}
+
+TEST_P(Ranks, SweepReportsWhatOneProcessDoes) {
+  const std::string one = sweep_without_seconds("");
+  EXPECT_GT(std::count(one.begin(), one.end(), '\n'), 10);
+  EXPECT_EQ(sweep_without_seconds(mpirun(GetParam())), one);
 }
 
 TEST_P(Ranks, ResumeACampaignThatLostARank) {
