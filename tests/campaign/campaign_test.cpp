@@ -81,13 +81,23 @@ TEST_F(CampaignDir, ACorruptShardIsRefusedByName) {
   EXPECT_NE(r.out.find("corrupt"), std::string::npos) << r.out;
 }
 
-TEST_F(CampaignDir, ADirectoryOfOtherArgumentsIsRefused) {
+TEST_F(CampaignDir, ADirectoryOfOtherArgumentsOrAnotherBuildIsRefused) {
   ASSERT_EQ(run_command("validate " + campaign(" --no-oracles")).code, 0);
   for (const std::string other : {"", " --no-oracles --no-predictive"}) {
     const Outcome r = run_command("validate " + campaign(other));
     EXPECT_EQ(r.code, 2) << other << ": " << r.out;
     EXPECT_NE(r.out.find(dir.string()), std::string::npos) << r.out;
     EXPECT_NE(r.out.find("other arguments"), std::string::npos) << r.out;
+  }
+  // Made by another build.
+  {
+    std::ifstream in(dir / "campaign.json");
+    nlohmann::json made = nlohmann::json::parse(in);
+    made["commit"] = "0000000000000000000000000000000000000000";
+    std::ofstream(dir / "campaign.json") << made.dump(2);
+    const Outcome r = run_command("validate " + campaign(" --no-oracles"));
+    EXPECT_EQ(r.code, 2) << r.out;
+    EXPECT_NE(r.out.find("commit: was \"0000000000000000000000000000000000000000\""), std::string::npos) << r.out;
   }
   // Not a campaign's directory at all.
   fs::remove(dir / "campaign.json");
