@@ -7,12 +7,12 @@
 // into.
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 
 #include <gtest/gtest.h>
 
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/oracle/exact.hpp"
+#include "rtcd/validation/differential.hpp"
 #include "support.hpp"
 
 namespace rtcd::test {
@@ -49,12 +49,7 @@ Judged judge(const StepResult& r, const std::shared_ptr<const Shape>& a, const P
     j.over_reports += over;
     EXPECT_FALSE(over) << "contact " << to_string(c.kind) << " of vertex " << c.vertex << ": depth " << c.depth
                        << ", push " << c.push.norm() << ", true penetration " << truth;
-    if (truth <= tiny) continue;
-    Eigen::Vector3d way = pose.orientation * (target.closest_point(p) - p);
-    if (c.depth <= truth + tiny && target.distance(pose.inverse().apply(c.origin + c.direction * c.depth)) <= tiny)
-      way = c.direction;
-    j.angles.push_back(std::acos(std::clamp(c.push.normalized().dot(way.normalized()), -1.0, 1.0)) * 180.0 /
-                       std::numbers::pi);
+    if (truth > tiny) j.angles.push_back(validation::push_angle(c, target, pose, truth, tiny));
   }
   return j;
 }

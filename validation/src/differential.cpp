@@ -91,16 +91,7 @@ void judge_truth(const StepResult& step, const PairResult& pr, const oracle::Exa
     const double ratio = solver / truth;
     m.max_truth_ratio = std::max(m.max_truth_ratio, ratio);
     m.truth_ratios.push_back(ratio);
-    // The way to the nearest surface point; where several are as near (the
-    // middle of a slab), the one the contact names if it is one of them.
-    const auto angle = [&](const Eigen::Vector3d& way) {
-      return std::acos(std::clamp(c.push.normalized().dot(way.normalized()), -1.0, 1.0)) * 180.0 / std::numbers::pi;
-    };
-    double degrees = angle(pose.orientation * (target.closest_point(p) - p));
-    if (degrees > 1.0 && c.depth <= truth + epsilon &&
-        target.distance(pose.inverse().apply(c.origin + c.direction * c.depth)) <= epsilon)
-      degrees = angle(c.direction);
-    m.push_angles.push_back(degrees);
+    m.push_angles.push_back(push_angle(c, target, pose, truth, epsilon));
   }
 }
 
@@ -499,6 +490,19 @@ Pose pose_from_json(const nlohmann::json& j, const std::string& where) {
 }
 
 }  // namespace
+
+double push_angle(const Contact& c, const oracle::ExactShape& target, const Pose& target_pose, double truth,
+                  double epsilon) {
+  const Eigen::Vector3d p = target_pose.inverse().apply(c.origin);
+  const auto angle = [&](const Eigen::Vector3d& way) {
+    return std::acos(std::clamp(c.push.normalized().dot(way.normalized()), -1.0, 1.0)) * 180.0 / std::numbers::pi;
+  };
+  double degrees = angle(target_pose.orientation * (target.closest_point(p) - p));
+  if (degrees > 1.0 && c.depth <= truth + epsilon &&
+      target.distance(target_pose.inverse().apply(c.origin + c.direction * c.depth)) <= epsilon)
+    degrees = angle(c.direction);
+  return degrees;
+}
 
 const char* to_string(RunMode mode) { return mode == RunMode::full ? "full" : "iterative"; }
 

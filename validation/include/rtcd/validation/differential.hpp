@@ -14,6 +14,8 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "rtcd/config.hpp"
+#include "rtcd/oracle/exact.hpp"
+#include "rtcd/results.hpp"
 #include "rtcd/validation/families.hpp"
 
 namespace rtcd::validation {
@@ -184,6 +186,13 @@ nlohmann::json to_json(const Shard& shard);
 Shard shard_from_json(const nlohmann::json& json);
 
 nlohmann::json to_json(const Summary& summary);
+// The angle (degrees) between a contact's push and the way from its point
+// to the target's nearest surface point, `truth` away; where several are as
+// near (the middle of a slab), the one the contact names if it is one of
+// them.
+double push_angle(const Contact& contact, const oracle::ExactShape& target, const Pose& target_pose, double truth,
+                  double epsilon);
+
 // One pair at full precision, and the command that replays it.
 std::string describe(const Family& family, const PairMetrics& pair, const RunOptions& options);
 
