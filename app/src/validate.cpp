@@ -60,7 +60,7 @@ std::vector<std::string> backends_of(const ValidateOptions& o) {
   return backends;
 }
 
-// The arguments that make a campaign: what it runs, not where.
+// The arguments that make a run (and a campaign): what it runs, not where.
 nlohmann::json campaign_arguments(const ValidateOptions& o, const std::vector<std::string>& families,
                                   const std::vector<std::string>& backends) {
   nlohmann::json kinds = nlohmann::json::array();
@@ -154,9 +154,15 @@ int run_validate(const ValidateOptions& o, const Ranks& ranks) {
   const std::vector<std::string> families = families_of(o), backends = backends_of(o);
   if (!o.sweep_csv.empty()) return run_sweep(o, families, backends, ranks);
 
+  const nlohmann::json arguments = campaign_arguments(o, families, backends);
+  // Every rank must run the same runs in the same order (each run gathers
+  // from all): a backend usable on some ranks only would leave them waiting.
+  if (const std::string mine = arguments.dump(), first = ranks.broadcast(mine); first != mine)
+    throw UsageError("rank " + std::to_string(ranks.rank()) + " would run " + mine + ", rank 0 " + first +
+                     ": give every rank the same arguments, and name the backends where some are not usable on "
+                     "every machine");
   std::optional<Campaign> campaign;
-  if (!o.campaign.empty())
-    campaign.emplace(o.campaign, campaign_arguments(o, families, backends), o.shard_pairs, o.hours, ranks);
+  if (!o.campaign.empty()) campaign.emplace(o.campaign, arguments, o.shard_pairs, o.hours, ranks);
   const SpreadShards runner(ranks, campaign ? &*campaign : nullptr);
   nlohmann::json all = nlohmann::json::array();
   if (!o.json && ranks.reports()) print_header(!o.no_oracles);

@@ -74,6 +74,16 @@ TEST_P(Ranks, ResumeACampaignThatLostARank) {
   fs::remove_all(dir);
 }
 
+// A rank with other arguments (pairs by rank) would wait for runs the others
+// never make: the job ends, naming the difference.
+TEST(MpiRanks, OtherArgumentsOnARankEndTheJob) {
+  const Outcome r = run_command(
+      "validate --family convex --backend embree --no-oracles --pairs $((10 + OMPI_COMM_WORLD_RANK))'",
+      mpirun(2) + "sh -c 'exec ");
+  EXPECT_EQ(r.code, 2) << r.out;
+  EXPECT_NE(r.out.find("give every rank the same arguments"), std::string::npos) << r.out;
+}
+
 INSTANTIATE_TEST_SUITE_P(Mpi, Ranks, ::testing::Values(1, 2, 3));
 
 }  // namespace
