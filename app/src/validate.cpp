@@ -3,20 +3,20 @@
 
 #include <algorithm>
 #include <cstdio>
-#include <optional>
 #include <fstream>
 #include <iostream>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
-#include "rtcd/backend.hpp"
-#include "rtcd/error.hpp"
-#include "rtcd/narrow_phase.hpp"
-#include "rtcd/validation/sweep.hpp"
-#include "rtcd/knobs_json.hpp"
-#include "rtcd/backend_options.hpp"
 #include "campaign.hpp"
 #include "commit.hpp"
+#include "rtcd/backend.hpp"
+#include "rtcd/backend_options.hpp"
+#include "rtcd/error.hpp"
+#include "rtcd/knobs_json.hpp"
+#include "rtcd/narrow_phase.hpp"
+#include "rtcd/validation/sweep.hpp"
 
 namespace rtcd::app {
 namespace {
@@ -61,7 +61,7 @@ std::vector<std::string> backends_of(const ValidateOptions& o) {
 }
 
 // The arguments that make a run (and a campaign): what it runs, not where.
-nlohmann::json campaign_arguments(const ValidateOptions& o, const std::vector<std::string>& families,
+nlohmann::json run_arguments(const ValidateOptions& o, const std::vector<std::string>& families,
                                   const std::vector<std::string>& backends) {
   nlohmann::json kinds = nlohmann::json::array();
   for (const auto& b : backends) kinds.push_back(to_string(BackendOptions::parse(b).kind));
@@ -154,7 +154,7 @@ int run_validate(const ValidateOptions& o, const Ranks& ranks) {
   const std::vector<std::string> families = families_of(o), backends = backends_of(o);
   if (!o.sweep_csv.empty()) return run_sweep(o, families, backends, ranks);
 
-  const nlohmann::json arguments = campaign_arguments(o, families, backends);
+  const nlohmann::json arguments = run_arguments(o, families, backends);
   // Every rank must run the same runs in the same order (each run gathers
   // from all): a backend usable on some ranks only would leave them waiting.
   if (const std::string mine = arguments.dump(), first = ranks.broadcast(mine); first != mine)
