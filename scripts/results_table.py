@@ -421,9 +421,24 @@ def python_rows():
                 "python", source, [m])]
 
 
+def campaign_rows():
+    m = meta("campaign")
+    source = "campaign/times.json"
+    t = read_json("campaign", "times.json")
+    for key in ("pairs", "pairs_per_second", "reports_equal"):
+        if key not in t:
+            raise ResultError(f"{RESULTS}/{source}: no {key}")
+    rate = t["pairs_per_second"]
+    if "1" not in rate or "2" not in rate:
+        raise ResultError(f"{RESULTS}/{source}: pairs_per_second lacks 1 or 2 ranks")
+    same = "reports equal" if t["reports_equal"] else "reports DIFFER"
+    return [Row(f"validation campaign, {t['pairs']} concave pairs with the oracles: pairs per second on 1 / 2 MPI ranks",
+                f"{rate['1']:.0f} / {rate['2']:.0f} ({rate['2'] / rate['1']:.2f}×; {same})", "campaign", source, [m])]
+
+
 def all_rows():
     return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + truth_rows()
-            + zoo_rows() + opencl_rows() + python_rows())
+            + zoo_rows() + opencl_rows() + python_rows() + campaign_rows())
 
 
 # ---------------------------------------------------------------- blocks
