@@ -216,6 +216,8 @@ std::vector<size_t> split(const std::string& s) {
 std::optional<std::vector<validation::Shard>> SpreadShards::run(const validation::Family& family,
                                                                 const validation::RunOptions& options) const {
   if (campaign) return run_in_campaign(family, options);
+  // One process: its one shard as it is, never through JSON.
+  if (ranks.size() == 1) return std::vector{validation::run_shard(family, options, 0, options.pairs)};
   // One shard a rank, as even as the pairs allow.
   const size_t n = options.pairs, size = size_t(ranks.size()), r = size_t(ranks.rank());
   const size_t first = n * r / size, end = n * (r + 1) / size;
