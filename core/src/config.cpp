@@ -95,6 +95,14 @@ const Knob kKnobs[] = {
      "2.9x a walking one",
      "Vertex rays only: surfaces that cross with no vertex inside (planks laid crosswise, thin bars) go unseen", false,
      RTCD_FLAG_KNOB(edge_contacts)},
+    {"edges_beside_contacts", KnobType::flag, 0, 0, "on",
+     "walking steps test the edges of a pair whose vertex rays report contacts too, not only of pairs with none",
+     "the edges near a resting pair's contact region, retested each walking step (most of a settled pile's edge "
+     "tests)",
+     "Walking steps rest a pair's edges while its vertex rays reported contacts the step before, until they report "
+     "none or the pair is traced in full: a crossing beside a contact region goes unseen meanwhile",
+     false,
+     RTCD_FLAG_KNOB(edges_beside_contacts)},
     {"nearest_surface", KnobType::flag, 0, 0, "on",
      "measure each contact's depth and push to the target's nearest surface point, not along its ray to where it "
      "leaves the target",

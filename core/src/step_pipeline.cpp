@@ -195,6 +195,9 @@ class PipelineNarrowPhase final : public NarrowPhase {
     Pose relative_at_full;               // lower id's frame in the higher id's frame
     std::vector<RayOutcome> tracked[2];  // last kept outcomes, by direction
     Residence residence[2];              // where the executor keeps them, by direction
+    // Watched edges at rest while the pair's vertex rays report contacts
+    // (Config::edges_beside_contacts off), as their last outcomes.
+    std::vector<RayOutcome> resting[2];
   };
   // The step's two batches (Algorithm 2): pairs traced in full (new, sent
   // back by equation 2.1, or every pair in full mode), and pairs walked.
@@ -218,6 +221,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void prepare(std::span<const BodyPair> pairs, StepResult& out);
   void decide(BodyPair pair, PairWork& work) const;
   void place(RayJob& job, BodyId source, BodyId target) const;
+  std::span<const RayOutcome> walked(PairState& state, int direction) const;
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive) const;
@@ -349,8 +353,8 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
       job.iterative = iterative;
       job.limits = w.limits;
       job.moved = iterative ? w.moved : 0.0;
-      job.tracked = w.state->tracked[direction(source, target)];
       job.residence = &w.state->residence[direction(source, target)];
+      job.tracked = iterative ? walked(*w.state, direction(source, target)) : std::span<const RayOutcome>{};
       place(job, source, target);
     }
   });
@@ -386,10 +390,35 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
   if (!w.fresh && config_.mode == Mode::automatic) iterative = w.moved <= w.limits.displacement_threshold;
   if (!iterative) {
     state.relative_at_full = relative;
-    state.tracked[0].clear();
-    state.tracked[1].clear();
+    for (int d : {0, 1}) {
+      state.tracked[d].clear();
+      state.resting[d].clear();
+    }
   }
   w.batch = iterative ? kWalked : kTraced;
+}
+
+// A walking direction's tracked rays to walk. With edges_beside_contacts off,
+// a pair whose vertex rays reported contacts the step before leaves its
+// watched edges out (they come last, after the origins): the contacts hold
+// the pair, and the edges near them cost most of a resting pair's walk. Once
+// no vertex contact is left, the resting edges are walked again; the
+// executor's copy of the rays no longer matches, so it is given them anew.
+std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d) const {
+  std::vector<RayOutcome>& tracked = state.tracked[d];
+  if (config_.edges_beside_contacts) return tracked;
+  const auto edges = std::find_if(tracked.begin(), tracked.end(), [](const RayOutcome& o) { return o.edge != 0; });
+  auto vertex_contact = [](const RayOutcome& o) { return o.edge == 0 && o.kind == RTCD_RAY_PENETRATING; };
+  const bool witnessed = std::any_of(state.tracked[0].begin(), state.tracked[0].end(), vertex_contact) ||
+                         std::any_of(state.tracked[1].begin(), state.tracked[1].end(), vertex_contact);
+  if (witnessed && std::all_of(edges, tracked.end(), [](const RayOutcome& o) { return o.edge == RTCD_ITEM_EDGE; }))
+    return {tracked.data(), size_t(edges - tracked.begin())};
+  if (!witnessed && !state.resting[d].empty()) {
+    tracked.insert(tracked.end(), state.resting[d].begin(), state.resting[d].end());
+    state.resting[d].clear();
+    state.residence[d] = {};
+  }
+  return tracked;
 }
 
 // Each direction from the two poses, not one from the other's inverse:
@@ -445,8 +474,12 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
       if (tally.contacts + tally.predictive > 0)
         fill(batch.jobs[w.first + k], kept, source, target, k == 0 ? Side::a : Side::b, contact, ahead);
       // The kept outcomes become the tracked rays; the slot takes the old
-      // ones' buffer for a later step.
-      kept.swap(w.state->tracked[direction(source, target)]);
+      // ones' buffer for a later step. Edges the job left out rest.
+      const int d = direction(source, target);
+      kept.swap(w.state->tracked[d]);
+      const size_t walked = batch.jobs[w.first + k].tracked.size();
+      if (batch.iterative && kept.size() > walked)
+        w.state->resting[d].insert(w.state->resting[d].end(), kept.begin() + walked, kept.end());
     }
     for (const Contact& contact : out.contacts_of(pr)) pr.max_depth = std::max(pr.max_depth, contact.depth);
   });

@@ -150,8 +150,8 @@ class NarrowPhase:
     def __init__(self, backend: str = "auto", *, threads: int = 0, mode: str = "auto",
                  max_walk_steps: int | None = None, displacement_threshold: float | None = None,
                  distance_extension: float | None = None, predictive: bool = True,
-                 verify_walks: bool = True, edge_contacts: bool = True, nearest_surface: bool = True,
-                 projected: bool = True) -> None: ...
+                 verify_walks: bool = True, edge_contacts: bool = True, edges_beside_contacts: bool = True,
+                 nearest_surface: bool = True, projected: bool = True) -> None: ...
     @property
     def name(self) -> str: ...
     @property

@@ -121,6 +121,46 @@ TEST_P(Edges, WalkingStepsFindEveryCrossingFullStepsFind) {
   EXPECT_GT(walks, 10u) << "the pair should walk most steps";
 }
 
+// edges_beside_contacts off: while a pair's vertex rays report contacts, its
+// walking steps rest its edges. B's end lies inside A (two vertex
+// contacts), then B slides back until no vertex is inside and only edges
+// cross: the first walking step after still rests them and sees nothing,
+// the next walks them again and finds the crossings a full trace finds.
+TEST_P(Edges, EdgesRestBesideVertexContacts) {
+  Config on, off;
+  on.mode = off.mode = Mode::iterative;
+  off.edges_beside_contacts = false;
+  auto a = bar_mesh(0.5, 0.05, 0.05), b = bar_mesh(0.05, 0.5, 0.05);
+  auto resting = rig(a, b, off), testing = rig(a, b, on), traced = rig(a, b);
+  // B's end corners at y = 0 and z = 0.04, inside A.
+  auto end_inside = [](int step) { return at(0, 0.5 - 0.001 * step, 0.09); };
+  for (int step = 0; step < 3; ++step) {
+    SCOPED_TRACE("end inside, step " + std::to_string(step));
+    const StepResult r = resting.step(Pose{}, end_inside(step)), t = testing.step(Pose{}, end_inside(step));
+    ASSERT_EQ(count(r, ContactKind::vertex), 2u);
+    EXPECT_EQ(count(r, ContactKind::vertex), count(t, ContactKind::vertex));
+    if (step == 0) continue;  // the full step
+    ASSERT_EQ(r.pairs[0].mode, PairMode::iterative);
+    EXPECT_EQ(r.stats.edges_tested, 0u) << "edges rest beside vertex contacts";
+    EXPECT_GT(t.stats.edges_tested, 0u) << "the knob on tests them";
+  }
+  // B's end at y = -0.1, outside A: only edges cross.
+  const Pose crossing = at(0, 0.4, 0.09);
+  const StepResult lag = resting.step(Pose{}, crossing), seen = testing.step(Pose{}, crossing);
+  EXPECT_EQ(lag.pairs[0].mode, PairMode::iterative);
+  EXPECT_FALSE(lag.pairs[0].colliding) << "the step after the last vertex contact still rests the edges";
+  EXPECT_TRUE(seen.pairs[0].colliding);
+  const StepResult back = resting.step(Pose{}, crossing), full = traced.step(Pose{}, crossing);
+  EXPECT_EQ(back.pairs[0].mode, PairMode::iterative);
+  EXPECT_GT(back.stats.edges_tested, 0u);
+  ASSERT_TRUE(back.pairs[0].colliding);
+  std::set<std::tuple<int, uint32_t, uint32_t>> walked, found;
+  for (const Contact& c : back.contacts) walked.insert({int(c.source), c.edge[0], c.edge[1]});
+  for (const Contact& c : full.contacts) found.insert({int(c.source), c.edge[0], c.edge[1]});
+  EXPECT_EQ(count(full, ContactKind::vertex), 0u);
+  EXPECT_EQ(walked, found);
+}
+
 // Two boxes through each other's whole cross-section: contacts are local.
 // Each of B's four long edges is 0.01 inside A's top or bottom face and is
 // pushed out through it, so they do not add up to the smallest separating

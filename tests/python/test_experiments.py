@@ -141,8 +141,8 @@ def narrow_phase_keywords() -> set[str]:
 
 # A value of each knob other than its default, to see it arrive.
 KNOB_VALUES = {"max_walk_steps": 17, "displacement_threshold": 0.01, "distance_extension": 0.03, "predictive": False,
-               "verify_walks": False, "edge_contacts": False, "nearest_surface": False, "projected": False,
-               "mode": "iterative"}
+               "verify_walks": False, "edge_contacts": False, "edges_beside_contacts": False,
+               "nearest_surface": False, "projected": False, "mode": "iterative"}
 
 
 def test_knobs_are_narrow_phase_keywords():

@@ -38,6 +38,8 @@ std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, 
   settings.push_back({"predictive", "off", RunMode::iterative, [](Config& c) { c.predictive = false; }});
   settings.push_back({"verify_walks", "off", RunMode::iterative, [](Config& c) { c.verify_walks = false; }});
   settings.push_back({"edge_contacts", "off", RunMode::iterative, [](Config& c) { c.edge_contacts = false; }});
+  settings.push_back({"edges_beside_contacts", "off", RunMode::iterative,
+                      [](Config& c) { c.edges_beside_contacts = false; }});
 
   std::vector<SweepPoint> points;
   for (const Setting& s : settings) {

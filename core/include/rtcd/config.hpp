@@ -37,6 +37,7 @@ struct Config {
   bool predictive = true;
   bool verify_walks = true;
   bool edge_contacts = true;     // Contact::edge, ContactKind::edge
+  bool edges_beside_contacts = true;  // off: walking steps rest edges while the pair has vertex contacts
   bool nearest_surface = true;   // off: the thesis' ray contact
   bool projected = true;         // what Contact::push holds for ray contacts
   Mode mode = Mode::automatic;
