@@ -32,7 +32,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join("docs", "results")
 
 # The folders, in the order docs/results/README.md lists them.
-FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "opencl", "threshold-sweep",
+FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "opencl", "gpu", "threshold-sweep",
            "accuracy-sweep",
            "edges", "python", "campaign"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
@@ -386,6 +386,24 @@ def opencl_rows():
                 f"{steady[0]:.0f} → {steady[1]:.0f} µs: {steady[0] / steady[1]:.2f}×", "opencl", source, [m])]
 
 
+def gpu_rows():
+    m = meta("gpu")
+    phase_c = {}
+    for name in ("replay_gpu", "replay_gpu_vertex", "replay_embree2"):
+        where = f"{RESULTS}/gpu/{name}.txt"
+        row = re.search(r"^\| C \| \d+ \| ([0-9.]+) \| [^|]+\| [0-9.]+ \| ([0-9.]+) \| ([0-9.]+) \|",
+                        read_text("gpu", f"{name}.txt"), re.M)
+        if not row:
+            raise ResultError(f"{where}: no phase C row")
+        phase_c[name] = (float(row.group(2)) + float(row.group(3)), float(row.group(1)))
+    source = "gpu/README.md"
+    gpu, vertex, embree = phase_c["replay_gpu"], phase_c["replay_gpu_vertex"], phase_c["replay_embree2"]
+    return [Row("OpenCL on an NVIDIA H100: avalanche phase C ray time (detect), edges on; Embree, 2 threads, same machine",
+                f"{gpu[0]:.2f} ms ({gpu[1]:.2f}); {embree[0]:.2f} ms ({embree[1]:.2f})", "gpu", source, [m]),
+            Row("OpenCL on an NVIDIA H100: avalanche phase C ray time, vertex rays only (thesis: 2.27 ms on a GTX 660)",
+                f"{vertex[0]:.2f} ms", "gpu", source, [m])]
+
+
 def run_rows():
     m = meta("run")
     s = read_json("run", "summary.json")
@@ -438,7 +456,7 @@ def campaign_rows():
 
 def all_rows():
     return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + truth_rows()
-            + zoo_rows() + opencl_rows() + python_rows() + campaign_rows())
+            + zoo_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows())
 
 
 # ---------------------------------------------------------------- blocks
