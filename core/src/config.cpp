@@ -97,8 +97,8 @@ const Knob kKnobs[] = {
      RTCD_FLAG_KNOB(edge_contacts)},
     {"edges_beside_contacts", KnobType::flag, 0, 0, "on",
      "walking steps test the edges of a pair whose vertex rays report contacts too, not only of pairs with none",
-     "the edges near a resting pair's contact region, retested each walking step (most of a settled pile's edge "
-     "tests)",
+     "the edge tests of walking pairs beside their vertex contacts: in the settled avalanche 28% of the edges "
+     "tested and a third of the walks' time",
      "Walking steps rest a pair's edges while its vertex rays reported contacts the step before, until they report "
      "none or the pair is traced in full: a crossing beside a contact region goes unseen meanwhile",
      false,
