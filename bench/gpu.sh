@@ -2,7 +2,8 @@
 # The OpenCL backend on a GPU: the validation families judged on it (full
 # and iterative mode), the avalanche recording replayed on it with edge
 # contacts (the default) and without (the thesis' configuration), the same
-# replay on Embree with 2 threads and with every core of the machine, and
+# replay on Embree with 2 threads and with every core of the machine, the
+# host's side on 2 threads and on every core, and
 # rtcd_bench's steady-contact cases. Needs an OpenCL GPU driver (its ICD).
 #   bash bench/gpu.sh [OUT]        (default docs/results/gpu)
 set -uo pipefail
@@ -24,9 +25,18 @@ run() {
 }
 run validate_full "$bin" validate --backend opencl:gpu --pairs 300 --no-oracles --mode full
 run validate_iterative "$bin" validate --backend opencl:gpu --pairs 300 --no-oracles --mode iterative
+all=$(nproc)
 run replay_gpu "$bin" replay "$recording" --backend opencl:gpu
 run replay_gpu_vertex "$bin" replay "$recording" --backend opencl:gpu --no-edge-contacts
 run replay_embree2 "$bin" replay "$recording" --backend embree --threads 2
-run replay_embree_all "$bin" replay "$recording" --backend embree --threads "$(nproc)"
+run replay_embree_all "$bin" replay "$recording" --backend embree --threads "$all"
+# The host's side of each step (prepare, gather) on more threads.
+for threads in 2 "$all"; do
+  run replay_gpu_threads$threads "$bin" replay "$recording" --backend opencl:gpu --threads "$threads"
+  run replay_gpu_vertex_threads$threads "$bin" replay "$recording" --backend opencl:gpu --threads "$threads" \
+    --no-edge-contacts
+done
+run replay_embree_all_vertex "$bin" replay "$recording" --backend embree --threads "$all" --no-edge-contacts
+run replay_gpu_full_threads$all "$bin" replay "$recording" --backend opencl:gpu --threads "$all" --mode full
 run bench build/release/bench/rtcd_bench --benchmark_filter='opencl|full_embree|^iterative/' \
   --benchmark_repetitions=3 --benchmark_report_aggregates_only=true
