@@ -103,6 +103,13 @@ const Knob kKnobs[] = {
      "none or the pair is traced in full: a crossing beside a contact region goes unseen meanwhile",
      false,
      RTCD_FLAG_KNOB(edges_beside_contacts)},
+    {"edge_retest_motion", KnobType::length, 0, kLongest, "every step",
+     "walking steps test a pair's watched edges (those that did not cross) again only once the pair has moved this far "
+     "(equation 2.1) since their last test; edges that crossed are tested every step, so no contact is stale, and a "
+     "crossing that begins meanwhile is found at most this much motion late",
+     "none; larger holds more of a resting pile's edges (their tests are most of its walks), and finds new crossings "
+     "later",
+     nullptr, false, RTCD_OPTIONAL_KNOB(edge_retest_motion)},
     {"nearest_surface", KnobType::flag, 0, 0, "on",
      "measure each contact's depth and push to the target's nearest surface point, not along its ray to where it "
      "leaves the target",

@@ -198,6 +198,10 @@ class PipelineNarrowPhase final : public NarrowPhase {
     // Watched edges at rest while the pair's vertex rays report contacts
     // (Config::edges_beside_contacts off), as their last outcomes.
     std::vector<RayOutcome> resting[2];
+    // Where the pair's edges were last tested (Config::edge_retest_motion).
+    Pose relative_at_edge_test;
+    // The executor's copy of a direction's rays lacks the edges held last step.
+    bool held[2] = {false, false};
   };
   // The step's two batches (Algorithm 2): pairs traced in full (new, sent
   // back by equation 2.1, or every pair in full mode), and pairs walked.
@@ -209,6 +213,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     bool fresh;
     PairLimits limits;
     double moved;  // walking pairs: equation 2.1 since the pair's last full step
+    bool hold_edges;  // walking pairs: their edges' last outcomes stand (Config::edge_retest_motion)
     Batch batch;
     uint32_t first;
   };
@@ -221,7 +226,8 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void prepare(std::span<const BodyPair> pairs, StepResult& out);
   void decide(BodyPair pair, PairWork& work) const;
   void place(RayJob& job, BodyId source, BodyId target) const;
-  std::span<const RayOutcome> walked(PairState& state, int direction) const;
+  std::span<const RayOutcome> walked(PairState& state, int direction, bool hold) const;
+  void hold_edges(std::span<const BodyPair> pairs);
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive) const;
@@ -286,6 +292,7 @@ void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out)
     (b == kWalked ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
   }
   executor_->account(out.stats);
+  hold_edges(pairs);
   gather(pairs, out);
   out.stats.seconds_gather = lap();
 }
@@ -354,7 +361,7 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
       job.limits = w.limits;
       job.moved = iterative ? w.moved : 0.0;
       job.residence = &w.state->residence[direction(source, target)];
-      job.tracked = iterative ? walked(*w.state, direction(source, target)) : std::span<const RayOutcome>{};
+      job.tracked = iterative ? walked(*w.state, direction(source, target), w.hold_edges) : std::span<const RayOutcome>{};
       place(job, source, target);
     }
   });
@@ -388,6 +395,9 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
   w.moved = w.fresh || config_.mode == Mode::full ? 0.0 : max_displacement(state.relative_at_full, relative, radius);
   if (!w.fresh && config_.mode == Mode::iterative) iterative = true;
   if (!w.fresh && config_.mode == Mode::automatic) iterative = w.moved <= w.limits.displacement_threshold;
+  w.hold_edges = iterative && config_.edge_retest_motion &&
+                 max_displacement(state.relative_at_edge_test, relative, radius) < *config_.edge_retest_motion;
+  if (!w.hold_edges) state.relative_at_edge_test = relative;
   if (!iterative) {
     state.relative_at_full = relative;
     for (int d : {0, 1}) {
@@ -404,15 +414,32 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
 // the pair, and the edges near them cost most of a resting pair's walk. Once
 // no vertex contact is left, the resting edges are walked again; the
 // executor's copy of the rays no longer matches, so it is given them anew.
-std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d) const {
+//
+// A pair that holds its edges (Config::edge_retest_motion) walks its origins
+// and the edges that crossed last step; hold_edges gives the other edges'
+// last outcomes (watched: no crossing) back to the step.
+std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d, bool hold) const {
   std::vector<RayOutcome>& tracked = state.tracked[d];
-  if (config_.edges_beside_contacts) return tracked;
   const auto edges = std::find_if(tracked.begin(), tracked.end(), [](const RayOutcome& o) { return o.edge != 0; });
+  const bool mesh_edges =
+      std::all_of(edges, tracked.end(), [](const RayOutcome& o) { return o.edge == RTCD_ITEM_EDGE; });
+  if (hold && mesh_edges) {
+    // Edges that crossed are tested again: a contact is never reported from
+    // an old test. The watched ones, behind them, are held.
+    auto crossed = [](const RayOutcome& o) { return o.kind == RTCD_RAY_PENETRATING; };
+    if (!std::is_partitioned(edges, tracked.end(), crossed)) {
+      std::partition(edges, tracked.end(), crossed);
+      state.residence[d] = {};
+    }
+    return {tracked.data(), size_t(std::partition_point(edges, tracked.end(), crossed) - tracked.begin())};
+  }
+  if (state.held[d]) state.residence[d] = {};
+  state.held[d] = false;
+  if (config_.edges_beside_contacts) return tracked;
   auto vertex_contact = [](const RayOutcome& o) { return o.edge == 0 && o.kind == RTCD_RAY_PENETRATING; };
   const bool witnessed = std::any_of(state.tracked[0].begin(), state.tracked[0].end(), vertex_contact) ||
                          std::any_of(state.tracked[1].begin(), state.tracked[1].end(), vertex_contact);
-  if (witnessed && std::all_of(edges, tracked.end(), [](const RayOutcome& o) { return o.edge == RTCD_ITEM_EDGE; }))
-    return {tracked.data(), size_t(edges - tracked.begin())};
+  if (witnessed && mesh_edges) return {tracked.data(), size_t(edges - tracked.begin())};
   if (!witnessed && !state.resting[d].empty()) {
     tracked.insert(tracked.end(), state.resting[d].begin(), state.resting[d].end());
     state.resting[d].clear();
@@ -431,6 +458,31 @@ void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const
                     .shape->bounds()
                     .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))
                     .grown(job.limits.distance_extension);
+}
+
+// The watched edges a walking pair held (Config::edge_retest_motion) rejoin
+// its directions' outcomes as they were, so they stay tracked. The
+// executor's copy of the rays now lacks them, so the state notes it.
+void PipelineNarrowPhase::hold_edges(std::span<const BodyPair> pairs) {
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    const PairWork& w = work_[i];
+    if (w.batch != kWalked || !w.hold_edges) continue;
+    RayBatch& batch = batches_[kWalked];
+    for (uint32_t k = 0; k < 2; ++k) {
+      const BodyId source = k == 0 ? pairs[i].a : pairs[i].b, target = k == 0 ? pairs[i].b : pairs[i].a;
+      const int d = direction(source, target);
+      const std::vector<RayOutcome>& last = w.state->tracked[d];
+      const size_t walked = batch.jobs[w.first + k].tracked.size();
+      if (last.size() == walked) continue;
+      std::vector<RayOutcome>& kept = batch.outcomes[w.first + k];
+      RayTally& tally = batch.tallies[w.first + k];
+      for (auto o = last.begin() + walked; o != last.end(); ++o) {
+        kept.push_back(*o);
+        tally.hold();
+      }
+      w.state->held[d] = true;
+    }
+  }
 }
 
 // Ranges per pair in input order (a's rays, then b's), then every record
@@ -478,7 +530,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
       const int d = direction(source, target);
       kept.swap(w.state->tracked[d]);
       const size_t walked = batch.jobs[w.first + k].tracked.size();
-      if (batch.iterative && kept.size() > walked)
+      if (batch.iterative && !w.state->held[d] && kept.size() > walked)
         w.state->resting[d].insert(w.state->resting[d].end(), kept.begin() + walked, kept.end());
     }
     for (const Contact& contact : out.contacts_of(pr)) pr.max_depth = std::max(pr.max_depth, contact.depth);

@@ -151,7 +151,8 @@ class NarrowPhase:
                  max_walk_steps: int | None = None, displacement_threshold: float | None = None,
                  distance_extension: float | None = None, predictive: bool = True,
                  verify_walks: bool = True, edge_contacts: bool = True, edges_beside_contacts: bool = True,
-                 nearest_surface: bool = True, projected: bool = True) -> None: ...
+                 edge_retest_motion: float | None = None, nearest_surface: bool = True,
+                 projected: bool = True) -> None: ...
     @property
     def name(self) -> str: ...
     @property

@@ -161,6 +161,41 @@ TEST_P(Edges, EdgesRestBesideVertexContacts) {
   EXPECT_EQ(walked, found);
 }
 
+// edge_retest_motion: while the pair has moved less than it since the
+// edges' last test, the watched edges are held (no test) and the edges that
+// crossed are tested again, so the contacts are a full trace's; past it,
+// every edge is tested again.
+TEST_P(Edges, WatchedEdgesHeldUntilThePairMoves) {
+  Config held, full;
+  held.mode = Mode::iterative;
+  held.edge_retest_motion = 0.005;
+  full.mode = Mode::full;
+  auto a = bar_mesh(0.5, 0.05, 0.05), b = bar_mesh(0.05, 0.5, 0.05);
+  auto walking = rig(a, b, held), traced = rig(a, b, full);
+  auto edges_of = [](const StepResult& r) {
+    std::set<std::tuple<int, uint32_t, uint32_t>> edges;
+    for (const Contact& c : r.contacts) edges.insert({int(c.source), c.edge[0], c.edge[1]});
+    return edges;
+  };
+  // B sinks 1 mm a step from 7.5 mm deep, then jumps 6 mm (past the motion).
+  const double heights[] = {0.0925, 0.0915, 0.0905, 0.0845};
+  for (int step = 0; step < 4; ++step) {
+    SCOPED_TRACE("step " + std::to_string(step));
+    const Pose pose = at(0.001 * step, 0, heights[step]);
+    const StepResult w = walking.step(Pose{}, pose), f = traced.step(Pose{}, pose);
+    ASSERT_TRUE(f.pairs[0].colliding);
+    EXPECT_EQ(edges_of(w), edges_of(f));
+    if (step == 0) continue;
+    ASSERT_EQ(w.pairs[0].mode, PairMode::iterative);
+    EXPECT_GT(w.stats.edges_tested, 0u) << "the crossing edges are tested again";
+    if (step < 3) {
+      EXPECT_GT(w.stats.edges_held, 0u) << "moved under 3 mm since the last test";
+    } else {
+      EXPECT_EQ(w.stats.edges_held, 0u) << "moved past 5 mm: every edge is tested";
+    }
+  }
+}
+
 // Two boxes through each other's whole cross-section: contacts are local.
 // Each of B's four long edges is 0.01 inside A's top or bottom face and is
 // pushed out through it, so they do not add up to the smallest separating

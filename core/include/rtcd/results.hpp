@@ -106,7 +106,7 @@ struct PairResult {
 struct RayCounts {
   size_t candidates{}, rays_full{}, rays_predictive{}, rays_iterative{}, walk_steps{};
   size_t nearest_queries{}, rays_retraced{}, rays_watched{}, fold_casts{};
-  size_t edges_tested{}, edges_skipped{}, edge_rays{}, edge_contacts{};
+  size_t edges_tested{}, edges_skipped{}, edge_rays{}, edge_contacts{}, edges_held{};
   std::array<size_t, kLineStatusCount> walk_endings{};  // iterative rays by how their line ended (line_status_name)
 
   RayCounts& operator+=(const RayCounts& other);
@@ -147,6 +147,8 @@ inline constexpr RayCounter kRayCounters[] = {
      "rays those tests cast"},
     {"edge_contacts", &RayCounts::edge_contacts,
      "edges that cross the target with neither end inside"},
+    {"edges_held", &RayCounts::edges_held,
+     "watched edges whose last test stands: their pair has moved less than edge_retest_motion since (not in edges_tested)"},
 };
 
 // One device's share of a step's rays (OpenCL backends).

@@ -101,6 +101,11 @@ struct RayTally : RayCounts {
       ++rays_full;
     }
   }
+  // A held watched edge, still tracked (Config::edge_retest_motion).
+  void hold() {
+    ++edges_held;
+    ++rays_watched;
+  }
   RayTally& operator+=(const RayTally& other);
 };
 
