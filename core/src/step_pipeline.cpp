@@ -213,7 +213,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     bool fresh;
     PairLimits limits;
     double moved;  // walking pairs: equation 2.1 since the pair's last full step
-    bool hold_edges;  // walking pairs: their edges' last outcomes stand (Config::edge_retest_motion)
+    bool hold_edges;  // walking pairs: their watched edges are not tested (Config::edge_retest_motion)
     Batch batch;
     uint32_t first;
   };
@@ -227,7 +227,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void decide(BodyPair pair, PairWork& work) const;
   void place(RayJob& job, BodyId source, BodyId target) const;
   std::span<const RayOutcome> walked(PairState& state, int direction, bool hold) const;
-  void hold_edges(std::span<const BodyPair> pairs);
+  void restore_held_edges(std::span<const BodyPair> pairs);
   void gather(std::span<const BodyPair> pairs, StepResult& out);
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive) const;
@@ -292,7 +292,7 @@ void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out)
     (b == kWalked ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
   }
   executor_->account(out.stats);
-  hold_edges(pairs);
+  restore_held_edges(pairs);
   gather(pairs, out);
   out.stats.seconds_gather = lap();
 }
@@ -361,7 +361,8 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
       job.limits = w.limits;
       job.moved = iterative ? w.moved : 0.0;
       job.residence = &w.state->residence[direction(source, target)];
-      job.tracked = iterative ? walked(*w.state, direction(source, target), w.hold_edges) : std::span<const RayOutcome>{};
+      job.tracked =
+          iterative ? walked(*w.state, direction(source, target), w.hold_edges) : std::span<const RayOutcome>{};
       place(job, source, target);
     }
   });
@@ -416,8 +417,8 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
 // executor's copy of the rays no longer matches, so it is given them anew.
 //
 // A pair that holds its edges (Config::edge_retest_motion) walks its origins
-// and the edges that crossed last step; hold_edges gives the other edges'
-// last outcomes (watched: no crossing) back to the step.
+// and the edges that crossed last step; restore_held_edges gives the other
+// edges' last outcomes (watched: no crossing) back to the step.
 std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d, bool hold) const {
   std::vector<RayOutcome>& tracked = state.tracked[d];
   const auto edges = std::find_if(tracked.begin(), tracked.end(), [](const RayOutcome& o) { return o.edge != 0; });
@@ -463,7 +464,7 @@ void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const
 // The watched edges a walking pair held (Config::edge_retest_motion) rejoin
 // its directions' outcomes as they were, so they stay tracked. The
 // executor's copy of the rays now lacks them, so the state notes it.
-void PipelineNarrowPhase::hold_edges(std::span<const BodyPair> pairs) {
+void PipelineNarrowPhase::restore_held_edges(std::span<const BodyPair> pairs) {
   for (size_t i = 0; i < pairs.size(); ++i) {
     const PairWork& w = work_[i];
     if (w.batch != kWalked || !w.hold_edges) continue;

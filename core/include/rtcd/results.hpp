@@ -148,7 +148,8 @@ inline constexpr RayCounter kRayCounters[] = {
     {"edge_contacts", &RayCounts::edge_contacts,
      "edges that cross the target with neither end inside"},
     {"edges_held", &RayCounts::edges_held,
-     "watched edges whose last test stands: their pair has moved less than edge_retest_motion since (not in edges_tested)"},
+     "watched edges whose last test stands: their pair has moved less than edge_retest_motion since (not in "
+     "edges_tested)"},
 };
 
 // One device's share of a step's rays (OpenCL backends).
