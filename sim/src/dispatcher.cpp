@@ -20,6 +20,8 @@
 #include <limits>
 #include <utility>
 
+#include <BulletDynamics/Dynamics/btRigidBody.h>
+
 #include "bullet_math.hpp"
 #include "rtcd/error.hpp"
 
@@ -74,17 +76,17 @@ BatchDispatcher::Slot* BatchDispatcher::slot_of(const btCollisionObject* object)
 
 // The deepest (or, for gaps, the nearest) first, then each next the one
 // farthest from those chosen. Deterministic: ties go to the earlier index.
-void BatchDispatcher::choose_spread(const std::vector<Candidate>& c, size_t budget, std::vector<size_t>& chosen) {
-  chosen.clear();
+void BatchDispatcher::choose_spread(std::span<const Candidate> c, size_t offset, size_t budget,
+                                    std::vector<size_t>& chosen) {
   if (c.empty() || budget == 0) return;
   size_t first = 0;
   for (size_t i = 1; i < c.size(); ++i)
     if (c[i].distance < c[first].distance) first = i;
   spread_.assign(c.size(), std::numeric_limits<double>::infinity());  // squared distance to the chosen set
-  for (size_t pick = first;;) {
-    chosen.push_back(pick);
+  for (size_t pick = first, count = 1;; ++count) {
+    chosen.push_back(offset + pick);
     spread_[pick] = -1.0;
-    if (chosen.size() == std::min(budget, c.size())) break;
+    if (count == std::min(budget, c.size())) break;
     size_t far = 0;
     double best = -1.0;
     for (size_t i = 0; i < c.size(); ++i) {
@@ -94,6 +96,23 @@ void BatchDispatcher::choose_spread(const std::vector<Candidate>& c, size_t budg
     }
     pick = far;
   }
+}
+
+// A speculative point acts only where the bodies would close its gap within
+// the step: spread over every predictive ray, the points went mostly to gaps
+// far from where the bodies met, and thin tubes fell into each other past
+// their middles.
+size_t BatchDispatcher::closing_first(const btCollisionObject* a, const btCollisionObject* b) {
+  const btRigidBody* ra = btRigidBody::upcast(a);
+  const btRigidBody* rb = btRigidBody::upcast(b);
+  const auto velocity = [](const btRigidBody* r, const Eigen::Vector3d& at) {
+    return r ? r->getVelocityInLocalPoint(bt(at) - r->getCenterOfMassPosition()) : btVector3(0, 0, 0);
+  };
+  const auto closes = [&](const Candidate& g) {
+    const btVector3 relative = velocity(ra, g.on_a) - velocity(rb, g.on_b);
+    return -double(relative.dot(bt(g.normal_on_b))) * step_seconds_ >= g.distance;
+  };
+  return size_t(std::stable_partition(gaps_.begin(), gaps_.end(), closes) - gaps_.begin());
 }
 
 Pose BatchDispatcher::shape_pose(const btCollisionObject* object) const {
@@ -106,6 +125,7 @@ void BatchDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairs, c
                                                 btDispatcher*) {
   auto t0 = Clock::now();
   batch_ = {batch_.calls + 1};
+  step_seconds_ = info.m_timeStep;
   batch_pairs_.clear();
   batch_objects_.clear();
   btBroadphasePairArray& array = pairs->getOverlappingPairArray();
@@ -182,8 +202,16 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
         gaps_.push_back({on_target, r.origin, -r.normal, gap, 1, int(r.vertex), -1});
     }
   }
-  choose_spread(touching_, options_.points_per_pair, chosen_touching_);
-  choose_spread(gaps_, options_.points_per_pair - chosen_touching_.size(), chosen_gaps_);
+  // The touching points first; what they leave goes to the gaps that close
+  // within the step, then to the others.
+  const size_t points = options_.points_per_pair;
+  const size_t closing = closing_first(a, b);
+  chosen_touching_.clear();
+  chosen_gaps_.clear();
+  choose_spread(touching_, 0, points, chosen_touching_);
+  const std::span<const Candidate> gaps(gaps_);
+  choose_spread(gaps.first(closing), 0, points - chosen_touching_.size(), chosen_gaps_);
+  choose_spread(gaps.subspan(closing), closing, points - chosen_touching_.size() - chosen_gaps_.size(), chosen_gaps_);
 
   // Last step's points, for warm starting, keyed by their ray.
   previous_.clear();

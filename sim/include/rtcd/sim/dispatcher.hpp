@@ -5,6 +5,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -19,7 +20,10 @@ struct DispatcherOptions {
   // Range [1, 64]. Chosen: the deepest ray, then each next the one farthest
   // from those already chosen, so the points span the contact region.
   uint32_t points_per_pair = 8;
-  // Predictive rays become speculative points (gap > 0) as well.
+  // Predictive rays become speculative points (gap > 0) as well, with the
+  // points the penetrating ones leave: first the gaps that close within the
+  // step (the two points' approach along the normal covers the gap), then
+  // the others.
   bool speculative = false;
   // Without these, points carry zero friction or restitution.
   bool friction = true;
@@ -85,7 +89,11 @@ class BatchDispatcher : public btCollisionDispatcher {
   };
   Slot* slot_of(const btCollisionObject* object);
   const Slot* slot_of(const btCollisionObject* object) const;
-  void choose_spread(const std::vector<Candidate>& candidates, size_t budget, std::vector<size_t>& chosen);
+  // Appends to `chosen` the indices (from `offset` on) of up to `budget` of
+  // the candidates, spread over them.
+  void choose_spread(std::span<const Candidate> candidates, size_t offset, size_t budget, std::vector<size_t>& chosen);
+  // Moves the gaps that close within the step to the front; returns how many.
+  size_t closing_first(const btCollisionObject* a, const btCollisionObject* b);
   void fill(const PairResult& pair, btCollisionObject* a, btCollisionObject* b, PairManifolds& held);
   void release(PairManifolds& held);
 
@@ -97,6 +105,7 @@ class BatchDispatcher : public btCollisionDispatcher {
   std::vector<std::pair<btCollisionObject*, btCollisionObject*>> batch_objects_;
   StepResult result_;
   Batch batch_;
+  double step_seconds_ = 0;  // the world's time step, from the dispatcher info
   // Scratch kept across pairs and steps, so a steady step allocates nothing.
   std::vector<Candidate> touching_, gaps_;
   std::vector<size_t> chosen_touching_, chosen_gaps_;
