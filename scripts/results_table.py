@@ -32,7 +32,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 RESULTS = os.path.join("docs", "results")
 
 # The folders, in the order docs/results/README.md lists them.
-FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "opencl", "gpu", "threshold-sweep",
+FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "piles", "opencl", "gpu", "threshold-sweep",
            "accuracy-sweep",
            "edges", "python", "campaign"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
@@ -346,6 +346,25 @@ def zoo_rows():
                 "(goal ≤ 30 steps)", f"{run['rtcd']:.0f} / {run['gimpact']:.0f} steps", "zoo", "zoo/README.md", [m])]
 
 
+def piles_rows():
+    m = meta("piles")
+    rows, header = read_csv("piles", "piles.csv")
+    for key in ("pile", "host", "holds_a_pair"):
+        if key not in header:
+            raise ResultError(f"{RESULTS}/piles/piles.csv: no column {key}")
+    held = {}
+    for r in rows:
+        h = held.setdefault(r["host"], [0, 0])
+        h[0] += int(number(r["holds_a_pair"], f"{RESULTS}/piles/piles.csv"))
+        h[1] += 1
+    if set(held) != {"rtcd", "gimpact"}:
+        raise ResultError(f"{RESULTS}/piles/piles.csv: hosts {sorted(held)}, not rtcd and gimpact")
+    piles = len({r["pile"] for r in rows})
+    return [Row(f"piles of one zoo kind ({piles} piles, 2 s each): runs in which a pair stays deeper than 2% of its "
+                "smaller body for more than 30 steps after 1 s, rtcd- / GIMPACT-hosted",
+                f"{held['rtcd'][0]} / {held['gimpact'][0]} of {held['rtcd'][1]}", "piles", "piles/README.md", [m])]
+
+
 def benchmark_medians(folder, name):
     """Median real time (µs) of each benchmark in Google Benchmark's JSON
     (NAME.json) or, failing that, its console output (NAME.txt)."""
@@ -457,7 +476,7 @@ def campaign_rows():
 
 def all_rows():
     return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + truth_rows()
-            + zoo_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows())
+            + zoo_rows() + piles_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows())
 
 
 # ---------------------------------------------------------------- blocks
