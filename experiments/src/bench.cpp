@@ -516,7 +516,8 @@ void Bench::introduction(std::ostream& report) const {
          << " ms; up to " << peak_pairs << " broad-phase pairs per step (" << recording.steps().back().pairs
          << " on the last). Distance extension " << limit_text(base.distance_extension) << ", displacement threshold "
          << limit_text(base.displacement_threshold) << ", " << scene.points_per_pair
-         << " contact points per pair reach the solver (the deepest ray, then the farthest-point spread).\n\n";
+         << " contact points per pair reach the solver (the deepest ray, then the farthest-point spread; speculative"
+            " gaps in what is left, those that close within the step first).\n\n";
   report << "Largest per-step motion of a surface point: " << fixed(motion.largest, 4) << " (" << fixed(motion.speed, 2)
          << " per second, step " << motion.step << ", body " << motion.body << ") against the distance extension "
          << limit_text(motion.distance_extension) << ": "
