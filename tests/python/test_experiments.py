@@ -82,12 +82,18 @@ def test_contacts_number_bodies_as_poses(scenes_dir):
     assert np.all((c.source_body < count) | (c.source_body == ground))
     assert np.all((c.target_body < count) | (c.target_body == ground))
     assert np.all((sim.pairs < count) | (sim.pairs == ground))
-    # blob_902 scaled by 0.25: every surface point within 0.3 of its centre.
+    # A contact point lies on its body: within the farthest vertex of
+    # blob_902, scaled by 0.25, from the mesh file's origin (the pose).
+    vertices = np.array([[float(x) for x in line.split()[1:4]]
+                         for line in (scenes_dir.parent / "meshes" / "blob_902.obj").read_text().splitlines()
+                         if line.startswith("v ")])
+    radius = 0.25 * np.linalg.norm(vertices, axis=1).max()
+    assert 0.3 < radius < 0.35
     src = c.source_body != ground
     reach = np.linalg.norm(c.origin[src] - sim.poses[c.source_body[src], :3], axis=1)
-    assert reach.max() < 0.3
+    assert reach.max() <= radius
     reach = np.linalg.norm(c.origin[between] - sim.poses[c.target_body[between], :3], axis=1)
-    assert reach.max() < 0.3, "the target holds the point"
+    assert reach.max() <= radius, "the target holds the point"
 
 
 def test_a_ball_falls():
