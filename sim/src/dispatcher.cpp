@@ -112,7 +112,17 @@ size_t BatchDispatcher::closing_first(const btCollisionObject* a, const btCollis
     const btVector3 relative = velocity(ra, g.on_a) - velocity(rb, g.on_b);
     return -double(relative.dot(bt(g.normal_on_b))) * step_seconds_ >= g.distance;
   };
-  return size_t(std::stable_partition(gaps_.begin(), gaps_.end(), closes) - gaps_.begin());
+  // A stable partition through kept scratch (std::stable_partition allocates).
+  others_.clear();
+  size_t closing = 0;
+  for (const Candidate& g : gaps_) {
+    if (closes(g))
+      gaps_[closing++] = g;
+    else
+      others_.push_back(g);
+  }
+  std::copy(others_.begin(), others_.end(), gaps_.begin() + ptrdiff_t(closing));
+  return closing;
 }
 
 Pose BatchDispatcher::shape_pose(const btCollisionObject* object) const {
@@ -205,10 +215,10 @@ void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btColli
   // The touching points first; what they leave goes to the gaps that close
   // within the step, then to the others.
   const size_t points = options_.points_per_pair;
-  const size_t closing = closing_first(a, b);
   chosen_touching_.clear();
   chosen_gaps_.clear();
   choose_spread(touching_, 0, points, chosen_touching_);
+  const size_t closing = chosen_touching_.size() < points ? closing_first(a, b) : 0;
   const std::span<const Candidate> gaps(gaps_);
   choose_spread(gaps.first(closing), 0, points - chosen_touching_.size(), chosen_gaps_);
   choose_spread(gaps.subspan(closing), closing, points - chosen_touching_.size() - chosen_gaps_.size(), chosen_gaps_);

@@ -17,11 +17,13 @@
 #include <iostream>
 #include <new>
 
+#include <btBulletDynamicsCommon.h>
 #include <gtest/gtest.h>
 
 #include "rtcd/backend.hpp"
 #include "rtcd/mesh_gen.hpp"
 #include "rtcd/narrow_phase.hpp"
+#include "rtcd/sim/dispatcher.hpp"
 #include "support.hpp"
 
 namespace {
@@ -196,6 +198,55 @@ INSTANTIATE_TEST_SUITE_P(Backends, SteadyStep,
                                             ::testing::Values(Mode::full, Mode::iterative, Mode::automatic),
                                             ::testing::Values(1, 64)),
                          name);
+
+// The Bullet host's batch: choosing and writing each pair's solver points
+// (touching ones, then speculative gaps sorted by whether they close within
+// the step) keeps its scratch from batch to batch. A blob sinking into
+// another as it falls: some points touch, some gaps close and some do not.
+TEST(Allocation, DispatcherSteadyBatchAllocatesNothing) {
+  Config config;
+  config.mode = Mode::automatic;
+  auto narrow = make_narrow_phase("embree", config);
+  const ShapeId shape = narrow->add_shape(std::make_shared<Shape>(gen::concave_blob(300, 1)));
+  btDefaultCollisionConfiguration configuration;
+  sim::DispatcherOptions options;
+  options.speculative = true;
+  sim::BatchDispatcher dispatcher(&configuration, *narrow, options);
+  btDbvtBroadphase broadphase;
+  btSequentialImpulseConstraintSolver solver;
+  btDiscreteDynamicsWorld world(&dispatcher, &broadphase, &solver, &configuration);
+  world.setGravity(btVector3(0, 0, 0));
+  btBoxShape bounds(btVector3(1.5f, 1.5f, 1.5f));
+  std::vector<std::unique_ptr<btRigidBody>> bodies;
+  for (int i = 0; i < 2; ++i) {
+    Pose pose;
+    pose.position = {0.1 * i, 0.05 * i, 2.1 * i};
+    btRigidBody::btRigidBodyConstructionInfo info(1, nullptr, &bounds, btVector3(1, 1, 1));
+    info.m_startWorldTransform.setOrigin(btVector3(btScalar(pose.position.x()), btScalar(pose.position.y()),
+                                                   btScalar(pose.position.z())));
+    bodies.push_back(std::make_unique<btRigidBody>(info));
+    world.addRigidBody(bodies.back().get());
+    dispatcher.link(bodies.back().get(), {narrow->add_body(shape, pose), Pose{}, 0.5, 0.0});
+  }
+  bodies[1]->setLinearVelocity(btVector3(0, 0, -3));
+  world.getDispatchInfo().m_timeStep = btScalar(1.0 / 60);
+  world.performDiscreteCollisionDetection();
+  btOverlappingPairCache* pairs = broadphase.getOverlappingPairCache();
+  for (int batch = 0; batch < 4; ++batch) dispatcher.dispatchAllCollisionPairs(pairs, world.getDispatchInfo(), &dispatcher);
+  const sim::BatchDispatcher::Batch& last = dispatcher.last_batch();
+  ASSERT_EQ(last.pairs, 1u);
+  ASSERT_GT(last.points - last.speculative_points, 0u) << "touching points";
+  ASSERT_GT(last.speculative_points, 0u) << "speculative points";
+  const Allocations before{allocations.load(), cxx_allocations.load()};
+  for (int batch = 0; batch < 10; ++batch)
+    dispatcher.dispatchAllCollisionPairs(pairs, world.getDispatchInfo(), &dispatcher);
+  EXPECT_EQ(cxx_allocations.load() - before.cxx, 0u) << "C++ allocations in 10 steady batches";
+  EXPECT_EQ(allocations.load() - before.heap, 0u) << "heap allocations in 10 steady batches";
+  for (auto& body : bodies) {
+    dispatcher.unlink(body.get());
+    world.removeRigidBody(body.get());
+  }
+}
 
 }  // namespace
 }  // namespace rtcd

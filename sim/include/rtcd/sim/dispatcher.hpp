@@ -107,7 +107,7 @@ class BatchDispatcher : public btCollisionDispatcher {
   Batch batch_;
   double step_seconds_ = 0;  // the world's time step, from the dispatcher info
   // Scratch kept across pairs and steps, so a steady step allocates nothing.
-  std::vector<Candidate> touching_, gaps_;
+  std::vector<Candidate> touching_, gaps_, others_;
   std::vector<size_t> chosen_touching_, chosen_gaps_;
   std::vector<double> spread_;
   std::vector<btManifoldPoint> previous_;
