@@ -398,7 +398,7 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
   if (!w.fresh && config_.mode == Mode::automatic) iterative = w.moved <= w.limits.displacement_threshold;
   w.hold_edges = iterative && config_.edge_retest_motion &&
                  max_displacement(state.relative_at_edge_test, relative, radius) < *config_.edge_retest_motion;
-  if (!w.hold_edges) state.relative_at_edge_test = relative;
+  if (config_.edge_retest_motion && !w.hold_edges) state.relative_at_edge_test = relative;
   if (!iterative) {
     state.relative_at_full = relative;
     for (int d : {0, 1}) {
@@ -421,6 +421,7 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
 // edges' last outcomes (watched: no crossing) back to the step.
 std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d, bool hold) const {
   std::vector<RayOutcome>& tracked = state.tracked[d];
+  if (!hold && !state.held[d] && config_.edges_beside_contacts) return tracked;  // the default: every ray walks
   const auto edges = std::find_if(tracked.begin(), tracked.end(), [](const RayOutcome& o) { return o.edge != 0; });
   const bool mesh_edges =
       std::all_of(edges, tracked.end(), [](const RayOutcome& o) { return o.edge == RTCD_ITEM_EDGE; });
