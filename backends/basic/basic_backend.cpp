@@ -18,7 +18,7 @@ class BasicTracer final : public MeshTracer {
     return {h.triangle, h.t};
   }
 
-  int32_t nearest(const rtcd_vec3& point, float radius) const override {
+  int32_t nearest(const rtcd_vec3& point, float radius, float) const override {
     return rtcd_brute_nearest(point, radius, positions(), triangles(), mesh_.zero_area().data(),
                               rtcd_uint(mesh_.triangle_count()));
   }

@@ -107,7 +107,7 @@ class EmbreeTracer final : public MeshTracer {
     return hit;
   }
 
-  int32_t nearest(const rtcd_vec3& point, float radius) const override {
+  int32_t nearest(const rtcd_vec3& point, float radius, float enough) const override {
     RTCPointQuery query;
     query.x = point.x;
     query.y = point.y;
@@ -116,7 +116,7 @@ class EmbreeTracer final : public MeshTracer {
     query.radius = radius;
     RTCPointQueryContext context;
     rtcInitPointQueryContext(&context);
-    Nearest found{this, point, -1, radius * radius};
+    Nearest found{this, point, -1, radius * radius, enough * enough};
     rtcPointQuery(scene_, &query, &context, &EmbreeTracer::visit, &found);
     return found.triangle;
   }
@@ -127,6 +127,7 @@ class EmbreeTracer final : public MeshTracer {
     rtcd_vec3 point;
     int32_t triangle;
     float best_d2;
+    float enough_d2;  // a triangle this near ends the search
   };
   // Embree calls this for every triangle whose box meets the query sphere;
   // shrinking the radius prunes the rest. The tie rule of tracer.h (the
@@ -147,7 +148,11 @@ class EmbreeTracer final : public MeshTracer {
     if (!(d2 <= found->best_d2) || !rtcd_nearer(found->best_d2, found->triangle, d2, id)) return false;
     found->best_d2 = d2;
     found->triangle = id;
-    args->query->radius = std::sqrt(d2) * (1.0f + 1e-6f) + 1e-30f;
+    // Near enough: a radius no box reaches but those holding the point, and
+    // no triangle nearer than this one can be taken.
+    const bool enough = d2 <= found->enough_d2;
+    if (enough) found->best_d2 = -1.0f;
+    args->query->radius = enough ? 1e-30f : std::sqrt(d2) * (1.0f + 1e-6f) + 1e-30f;
     return true;
   }
 

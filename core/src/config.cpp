@@ -103,6 +103,15 @@ const Knob kKnobs[] = {
      "none or the pair is traced in full: a crossing beside a contact region goes unseen meanwhile",
      false,
      RTCD_FLAG_KNOB(edges_beside_contacts)},
+    {"edges_both_sides", KnobType::flag, 0, 0, "on",
+     "a pair of meshes tests the edges of both meshes against the other",
+     "the edge tests of the second mesh: in the settled avalanche half the edges tested, 40% of its ray time",
+     "A pair of meshes tests only the edges of the finer one (the shorter longest edge; the lower body id on a "
+     "tie): a crossing with no vertex inside is still found wherever an edge of that mesh crosses, which every "
+     "crossing does unless the other mesh passes a part free of vertices (a rod, a thin tip) right through a wall "
+     "of the finer one",
+     false,
+     RTCD_FLAG_KNOB(edges_both_sides)},
     {"edge_retest_motion", KnobType::length, 0, kLongest, "every step",
      "walking steps test a pair's watched edges (those that did not cross) again only once the pair has moved this far "
      "(equation 2.1) since their last test; edges that crossed are tested every step, so no contact is stale, and a "

@@ -36,8 +36,8 @@ static rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray,
   const float located = rtcd_hit_distance(ray, corner(0), corner(1), corner(2));
   return {h.triangle, located >= 0.0f && located <= t_max ? located : h.t};
 }
-static rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius) {
-  return t->tracer->nearest(point, radius);
+static rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius, float enough) {
+  return t->tracer->nearest(point, radius, enough);
 }
 static rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_ray* ray, rtcd_int start, rtcd_uint max_steps) {
   const rtcd::Mesh& m = *t->mesh;
@@ -296,7 +296,7 @@ rtcd_trace_params make_trace_params(const RayJob& job, const Shape& source, cons
   // A half-space needs no edge test: a body crossing its plane has an
   // origin below it. A sphere has no edges: its deepest point is tested
   // against spheres and boxes only.
-  p.edges = config.edge_contacts && !std::holds_alternative<HalfSpace>(target.geometry()) &&
+  p.edges = job.edges && config.edge_contacts && !std::holds_alternative<HalfSpace>(target.geometry()) &&
             !(p.source_radius > 0.0f && target.mesh());
   p.nearest_surface = config.nearest_surface && target.mesh() != nullptr;
   return p;

@@ -39,9 +39,13 @@ struct ShapeEntry {
   };
   std::vector<Plane> planes;
   ShapeScale scale;  // measured only when some limit is derived
+  float longest_edge = 0.0f;  // meshes: which of a pair tests its edges (Config::edges_both_sides off)
 
   ShapeEntry(std::shared_ptr<const Shape> s, bool measure) : shape(std::move(s)) {
     if (measure) scale = measure_scale(*shape);
+    const RaySources& rs = shape->sources();
+    for (uint32_t e = rs.first_edge(); shape->mesh() && e < rs.item_count(); ++e)
+      longest_edge = std::max(longest_edge, rs.item_direction(e).norm());
     for (const Eigen::Vector3f& d : shape->sources().directions)
       directions.push_back(d.isZero() ? Eigen::Vector3d::Zero() : Eigen::Vector3d(d.cast<double>().normalized()));
     if (const Mesh* m = shape->mesh()) {
@@ -191,6 +195,19 @@ class PipelineNarrowPhase final : public NarrowPhase {
   // A pair's state is kept by id order, whatever order the host names the
   // pair in: direction 0 is the lower id's rays into the higher, 1 the reverse.
   static int direction(BodyId source, BodyId target) { return source < target ? 0 : 1; }
+  // The body of a pair whose edges are tested: both (kAnyBody) unless
+  // Config::edges_both_sides is off and both are meshes; then the finer mesh
+  // (its longest edge shorter; on a tie the lower id). Either mesh's edges
+  // find every crossing region but one where the other passes a part free
+  // of vertices right through a wall of it (docs/knobs.md).
+  static constexpr BodyId kAnyBody = ~BodyId(0);
+  BodyId edge_side(const BodyPair& p) const {
+    const ShapeEntry& a = shapes_[bodies_[p.a].shape];
+    const ShapeEntry& b = shapes_[bodies_[p.b].shape];
+    if (config_.edges_both_sides || !a.shape->mesh() || !b.shape->mesh()) return kAnyBody;
+    if (a.longest_edge != b.longest_edge) return a.longest_edge < b.longest_edge ? p.a : p.b;
+    return std::min(p.a, p.b);
+  }
   struct PairState {
     Pose relative_at_full;               // lower id's frame in the higher id's frame
     std::vector<RayOutcome> tracked[2];  // last kept outcomes, by direction
@@ -352,12 +369,14 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     pr = PairResult{};
     pr.pair = p;
     pr.mode = iterative ? PairMode::iterative : PairMode::full;
+    const BodyId edges = edge_side(p);
     for (uint32_t k = 0; k < 2; ++k) {
       const BodyId source = k == 0 ? p.a : p.b, target = k == 0 ? p.b : p.a;
       RayJob& job = batches_[w.batch].jobs[w.first + k];
       job.source = bodies_[source].shape;
       job.target = bodies_[target].shape;
       job.iterative = iterative;
+      job.edges = edges == kAnyBody || edges == source;
       job.limits = w.limits;
       job.moved = iterative ? w.moved : 0.0;
       job.residence = &w.state->residence[direction(source, target)];

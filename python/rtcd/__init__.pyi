@@ -151,6 +151,7 @@ class NarrowPhase:
                  max_walk_steps: int | None = None, displacement_threshold: float | None = None,
                  distance_extension: float | None = None, predictive: bool = True,
                  verify_walks: bool = True, edge_contacts: bool = True, edges_beside_contacts: bool = True,
+                 edges_both_sides: bool = True,
                  edge_retest_motion: float | None = None, nearest_surface: bool = True,
                  projected: bool = True) -> None: ...
     @property

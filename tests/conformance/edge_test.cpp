@@ -288,6 +288,64 @@ TEST_P(Edges, SphereCapBetweenSamplePoints) {
 // rounded faces overlap by 1.5e-9, deeper than the tolerance of a 0.1 edge).
 // (An edge along another edge always puts a vertex on the other body's
 // edge, where vertex rays report a zero depth: not an edge matter.)
+// edges_both_sides off: a pair of meshes tests the finer mesh's edges only.
+// A square rod (longest edge 0.61) passes through a coarse plank (1.42)
+// with neither's vertex inside the other and clear of the plank's edges:
+// only the rod's edges cross, and they are found whichever body comes
+// first, in every mode (a walking step too). Planks laid crosswise (longest
+// edges 1.005 and 0.80) cross along both's edges: the finer's alone are
+// tested, and find what they find with both sides tested.
+TEST_P(Edges, TheFinerMeshsEdgesOnly) {
+  auto rod = bar_mesh(0.02, 0.02, 0.3), plank = bar_mesh(0.5, 0.5, 0.02);
+  for (const Mode mode : {Mode::full, Mode::iterative}) {
+    SCOPED_TRACE(to_string(mode));
+    Config both, one;
+    both.mode = one.mode = mode;
+    one.edges_both_sides = false;
+    for (const bool plank_first : {true, false}) {
+      SCOPED_TRACE(plank_first ? "plank is a" : "rod is a");
+      auto tested = plank_first ? rig(plank, rod, one) : rig(rod, plank, one);
+      auto all = plank_first ? rig(plank, rod, both) : rig(rod, plank, both);
+      const Side rod_side = plank_first ? Side::b : Side::a;
+      StepResult r, b;
+      for (const double y : {0.0, 0.001}) {
+        const Pose p = at(0.25, y, 0.0);
+        r = plank_first ? tested.step(Pose{}, p) : tested.step(p, Pose{});
+        b = plank_first ? all.step(Pose{}, p) : all.step(p, Pose{});
+      }
+      EXPECT_EQ(r.pairs[0].mode, mode == Mode::full ? PairMode::full : PairMode::iterative);
+      ASSERT_TRUE(r.pairs[0].colliding);
+      EXPECT_EQ(count(r, ContactKind::vertex), 0u) << "no vertex is inside";
+      std::set<std::tuple<int, uint32_t, uint32_t>> found, with_both;
+      for (const Contact& c : r.contacts) {
+        EXPECT_EQ(c.source, rod_side) << "the plank's edges are not tested";
+        found.insert({int(c.source), c.edge[0], c.edge[1]});
+      }
+      for (const Contact& c : b.contacts) with_both.insert({int(c.source), c.edge[0], c.edge[1]});
+      EXPECT_EQ(found, with_both) << "the plank's edges cross nothing here";
+    }
+    auto tested = rig(bar_mesh(0.5, 0.05, 0.05), bar_mesh(0.05, 0.4, 0.05), one);
+    auto all = rig(bar_mesh(0.5, 0.05, 0.05), bar_mesh(0.05, 0.4, 0.05), both);
+    StepResult r, b;
+    for (const double z : {0.0925, 0.09}) {
+      r = tested.step(Pose{}, at(0, 0, z));
+      b = all.step(Pose{}, at(0, 0, z));
+    }
+    ASSERT_TRUE(r.pairs[0].colliding);
+    std::set<std::tuple<int, uint32_t, uint32_t>> found, of_b;
+    size_t from_a = 0;
+    for (const Contact& c : r.contacts) found.insert({int(c.source), c.edge[0], c.edge[1]});
+    for (const Contact& c : b.contacts) {
+      if (c.source == Side::b) of_b.insert({int(c.source), c.edge[0], c.edge[1]});
+      from_a += c.source == Side::a;
+    }
+    EXPECT_GT(from_a, 0u) << "A's edges cross too: with both sides they are found";
+    EXPECT_EQ(found, of_b);
+    EXPECT_LT(r.stats.edges_tested, b.stats.edges_tested);
+    EXPECT_NEAR(r.pairs[0].max_depth, 0.01, 1e-6);
+  }
+}
+
 TEST_P(Edges, TouchingIsNotCrossing) {
   Config config;
   config.mode = Mode::full;

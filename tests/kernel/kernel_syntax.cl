@@ -21,7 +21,7 @@ typedef struct {
 rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
   return rtcd_brute_first_hit(ray, t->positions, t->triangles, t->zero_area, 1u, t_max);
 }
-rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius) {
+rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius, float enough) {
   return rtcd_brute_nearest(point, radius, t->positions, t->triangles, t->zero_area, 1u);
 }
 rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_ray* ray, rtcd_int start, rtcd_uint max_steps) {

@@ -93,7 +93,7 @@ class ArenaProbe final : public MeshTracerFactory {
       }
       return {};
     }
-    int32_t nearest(const rtcd_vec3&, float) const override { return -1; }
+    int32_t nearest(const rtcd_vec3&, float, float) const override { return -1; }
   };
   std::unique_ptr<MeshTracer> build(const Mesh&) const override {
     auto t = std::make_unique<Tracer>();

@@ -21,7 +21,7 @@ struct BruteTracer {
 static rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
   return rtcd_brute_first_hit(ray, t->positions(), t->triangles(), t->mesh->zero_area().data(), t->count(), t_max);
 }
-static rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius) {
+static rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius, float) {
   return rtcd_brute_nearest(point, radius, t->positions(), t->triangles(), t->mesh->zero_area().data(), t->count());
 }
 static rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer* t, const rtcd_ray* ray, rtcd_int start, rtcd_uint steps) {

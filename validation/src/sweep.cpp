@@ -40,6 +40,8 @@ std::vector<SweepPoint> sweep(const Family& family, const std::string& backend, 
   settings.push_back({"edge_contacts", "off", RunMode::iterative, [](Config& c) { c.edge_contacts = false; }});
   settings.push_back({"edges_beside_contacts", "off", RunMode::iterative,
                       [](Config& c) { c.edges_beside_contacts = false; }});
+  settings.push_back({"edges_both_sides", "off", RunMode::iterative,
+                      [](Config& c) { c.edges_both_sides = false; }});
   for (double m : {0.005, 0.02})
     settings.push_back({"edge_retest_motion", text(m), RunMode::iterative,
                         [m](Config& c) { c.edge_retest_motion = m; }});

@@ -38,6 +38,7 @@ struct Config {
   bool verify_walks = true;
   bool edge_contacts = true;     // Contact::edge, ContactKind::edge
   bool edges_beside_contacts = true;  // off: walking steps rest edges while the pair has vertex contacts
+  bool edges_both_sides = true;       // off: a pair of meshes tests the finer mesh's edges only
   std::optional<double> edge_retest_motion;  // walking steps; unset: every watched edge every step
   bool nearest_surface = true;   // off: the thesis' ray contact
   bool projected = true;         // what Contact::push holds for ray contacts

@@ -26,9 +26,10 @@ class MeshTracer {
   // from either side; zero-area triangles are never hit.
   virtual TraceHit first_hit(const rtcd_ray& ray, float t_max) const = 0;
   // A triangle nearest to `point` within `radius` (ties: the lowest id, the
-  // rule of kernel/tracer.h), or -1; zero-area
-  // triangles are never returned.
-  virtual int32_t nearest(const rtcd_vec3& point, float radius) const = 0;
+  // rule of kernel/tracer.h), or -1; zero-area triangles are never
+  // returned. A tracer may return instead any triangle within `enough`
+  // (0: never), the first it meets.
+  virtual int32_t nearest(const rtcd_vec3& point, float radius, float enough) const = 0;
 };
 
 class MeshTracerFactory {

@@ -50,6 +50,7 @@ struct RayJob {
   // Candidate origins lie in this box (target frame); empty: no candidates.
   Aabb overlap;
   bool iterative = false;
+  bool edges = true;  // this direction tests its source's edges (Config::edge_contacts permitting)
   PairLimits limits;
   // Iterative jobs: how far a point of the source may have moved relative
   // to the target since the pair's last full step (equation 2.1); a watched

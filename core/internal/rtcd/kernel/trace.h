@@ -5,7 +5,9 @@
  * The includer supplies the mesh tracer before including this header:
  *   typedef ... rtcd_tracer;
  *   rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer*, const rtcd_ray*, float t_max);
- *   rtcd_int rtcd_tracer_nearest(const rtcd_tracer*, rtcd_vec3 point, float radius);
+ *   rtcd_int rtcd_tracer_nearest(const rtcd_tracer*, rtcd_vec3 point, float radius, float enough);
+ *     (the nearest triangle within radius, or -1; a tracer may stop at any
+ *     triangle within `enough` of the point instead, 0: never)
  *   rtcd_walk_result rtcd_tracer_walk(const rtcd_tracer*, const rtcd_ray*, rtcd_int start, rtcd_uint max_steps);
  *   int rtcd_tracer_leaves(const rtcd_tracer*, rtcd_int triangle, rtcd_vec3 direction);
  *     (direction . the triangle's unit normal > 0)
@@ -37,7 +39,7 @@ RTCD_INLINE void rtcd_nearest_surface(const rtcd_tracer* tracer, const rtcd_trac
   if (!p->nearest_surface || o->kind != RTCD_RAY_PENETRATING) return;
   exit = RTCD_SQRT(rtcd_tracer_distance2(tracer, o->triangle, c->origin));
   o->nearest_query = 1;
-  o->nearest = rtcd_tracer_nearest(tracer, c->origin, exit * 1.0001f);
+  o->nearest = rtcd_tracer_nearest(tracer, c->origin, exit * 1.0001f, 0.0f);
   if (o->nearest < 0) o->nearest = o->triangle;
 }
 
@@ -88,7 +90,7 @@ RTCD_INLINE void rtcd_full_trace(const rtcd_tracer* tracer, const rtcd_trace_par
     return;
   }
   o->nearest_query = 1;
-  near = rtcd_tracer_nearest(tracer, c->origin, p->reach);
+  near = rtcd_tracer_nearest(tracer, c->origin, p->reach, 0.0f);
   if (near >= 0) {
     o->kind = RTCD_RAY_WATCHED;
     o->triangle = near;
@@ -108,7 +110,7 @@ RTCD_INLINE void rtcd_walk_trace(const rtcd_tracer* tracer, const rtcd_trace_par
     /* Watched since the full step, its nearest triangle not looked up yet:
      * done now that the pair walks. */
     o->nearest_query = 1;
-    start = rtcd_tracer_nearest(tracer, c->origin, p->reach);
+    start = rtcd_tracer_nearest(tracer, c->origin, p->reach, 0.0f);
     if (start < 0) return; /* dropped: nothing within reach */
   }
   exit_walk = rtcd_tracer_walk(tracer, &ray, start, p->max_walk_steps);
@@ -215,7 +217,9 @@ RTCD_INLINE float rtcd_edge_clearance(const rtcd_tracer* tracer, const rtcd_trac
   rtcd_vec3 middle = rtcd_add(c->origin, rtcd_scale(c->direction, 0.5f));
   rtcd_int near;
   o->nearest_query = 1;
-  near = rtcd_tracer_nearest(tracer, middle, half_length + p->reach + p->moved);
+  /* Any triangle within half the length makes the clearance 0: the search
+   * may stop there. */
+  near = rtcd_tracer_nearest(tracer, middle, half_length + p->reach + p->moved, half_length);
   if (near < 0) return -1.0f;
   clearance = RTCD_SQRT(rtcd_tracer_distance2(tracer, near, middle)) - half_length;
   return clearance > 0.0f ? clearance : 0.0f;
@@ -308,7 +312,7 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
   /* The surface is within (m - a) of the point: its entry lies there. */
   length = RTCD_SQRT(rtcd_dot(c->direction, c->direction));
   point = rtcd_add(c->origin, rtcd_scale(c->direction, m));
-  o->triangle = rtcd_tracer_nearest(tracer, point, (b - a) * length);
+  o->triangle = rtcd_tracer_nearest(tracer, point, (b - a) * length, 0.0f);
   if (o->triangle < 0) o->triangle = first.triangle;
   tolerance = RTCD_TOUCHING * length;
   if (!(rtcd_tracer_distance2(tracer, o->triangle, point) > tolerance * tolerance)) {
