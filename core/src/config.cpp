@@ -105,7 +105,7 @@ const Knob kKnobs[] = {
      RTCD_FLAG_KNOB(edges_beside_contacts)},
     {"edges_both_sides", KnobType::flag, 0, 0, "on",
      "a pair of meshes tests the edges of both meshes against the other",
-     "the edge tests of the second mesh: in the settled avalanche half the edges tested, 40% of its ray time",
+     "the edge tests of the second mesh: in the settled avalanche half the edges tested, a third of its ray time",
      "A pair of meshes tests only the edges of the finer one (the shorter longest edge; the lower body id on a "
      "tie): a crossing with no vertex inside is still found wherever an edge of that mesh crosses, which every "
      "crossing does unless the other mesh passes a part free of vertices (a rod, a thin tip) right through a wall "
