@@ -201,9 +201,12 @@ int main(int argc, char** argv) {
   auto* replay = app.add_subcommand(
       "replay", "Replay a recording (from rtcd bench) through one narrow-phase configuration: time per stage and phase");
   replay->add_option("RECORDING", ro.recording, "recording.rtcdrec")->required();
-  replay->add_option("--backend", ro.backend, "basic, embree, opencl[-basic][:...] or auto (default: embree)");
-  replay->add_option("--mode", ro.mode, "full, iterative or auto (default: auto)");
-  replay->add_option("--threads", ro.threads, "Worker threads (default: 1)")->check(CLI::Range(1, 4096));
+  auto* peer = replay->add_option("--peer", ro.peer,
+                                  "gimpact or fcl: that library on the same steps instead of rtcd, one thread (the peers "
+                                  "of rtcd bench, on every step)");
+  replay->add_option("--backend", ro.backend, "basic, embree, opencl[-basic][:...] or auto (default: embree)")->excludes(peer);
+  replay->add_option("--mode", ro.mode, "full, iterative or auto (default: auto)")->excludes(peer);
+  replay->add_option("--threads", ro.threads, "Worker threads (default: 1)")->check(CLI::Range(1, 4096))->excludes(peer);
   replay->add_option("--judge-every", ro.judge_every, "Judge rays by the exact reference every k-th step (default: never)");
   replay->add_option("--last", ro.last, "Also sum the recording's last N steps, in a row of their own (default: none)")
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));

@@ -46,15 +46,20 @@ struct Sum {
   }
 };
 
-void print_row(const Sum& s) {
+// A peer (GIMPACT, FCL) has no stages, modes or rays: those cells say "–".
+void print_row(const Sum& s, bool ours) {
   const double n = double(std::max<uint64_t>(s.steps, 1));
   const auto ms = [&](double seconds) { return 1e3 * seconds / n; };
   const auto percent = [&](size_t count) { return s.pairs ? 100.0 * double(count) / double(s.pairs) : 0.0; };
-  std::printf("| %s | %llu | %.3f | %.2f (%llu) | %.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.1f%% | %.0f | %.0f | ", s.name.c_str(),
-              static_cast<unsigned long long>(s.steps), ms(s.detect), 1e3 * s.peak,
-              static_cast<unsigned long long>(s.peak_step), ms(s.prepare), ms(s.full), ms(s.walks), ms(s.gather),
-              double(s.pairs) / n, percent(s.pairs_full), percent(s.fallbacks), double(s.counts.rays()) / n,
-              double(s.contacts) / n);
+  std::printf("| %s | %llu | %.3f | %.2f (%llu) | ", s.name.c_str(), static_cast<unsigned long long>(s.steps),
+              ms(s.detect), 1e3 * s.peak, static_cast<unsigned long long>(s.peak_step));
+  if (ours) {
+    std::printf("%.3f | %.3f | %.3f | %.3f | %.0f | %.1f%% | %.1f%% | %.0f | %.0f | ", ms(s.prepare), ms(s.full),
+                ms(s.walks), ms(s.gather), double(s.pairs) / n, percent(s.pairs_full), percent(s.fallbacks),
+                double(s.counts.rays()) / n, double(s.contacts) / n);
+  } else {
+    std::printf("– | – | – | – | %.0f | – | – | – | %.0f | ", double(s.pairs) / n, double(s.contacts) / n);
+  }
   if (s.judged == 0) {
     std::printf("– |\n");
   } else {
@@ -87,7 +92,14 @@ int run_replay(const ReplayOptions& o) {
     throw UsageError("--last " + std::to_string(o.last) + ": " + o.recording + " holds only " +
                      std::to_string(recording.steps().size()) + " steps");
   experiments::ReplayConfig c;
-  c.label = o.backend + " " + o.mode;
+  if (!o.peer.empty()) {
+    if (o.peer != "gimpact" && o.peer != "fcl") throw UsageError("--peer " + o.peer + ": gimpact or fcl");
+    if (o.judge_every > 0 || !o.knobs.set.empty())
+      throw UsageError("--peer " + o.peer + ": --judge-every and the knobs are rtcd's");
+    c.engine = o.peer == "gimpact" ? experiments::Engine::gimpact : experiments::Engine::fcl;
+  }
+  const bool ours = c.engine == experiments::Engine::ours;
+  c.label = ours ? o.backend + " " + o.mode : experiments::to_string(c.engine);
   c.backend = o.backend;
   c.config = recording.scene().narrow;
   c.config.mode = parse_mode(o.mode);
@@ -100,9 +112,15 @@ int run_replay(const ReplayOptions& o) {
   const experiments::ReplayRun run = experiments::replay(recording, {c}, ro).front();
 
   const experiments::Phases phases = experiments::find_phases(recording.steps());
-  std::printf("%s: scene %s, %zu steps; %s, mode %s, %d thread%s; machine %s\n", o.recording.c_str(),
-              recording.scene().name.c_str(), recording.steps().size(), run.engine_name.c_str(), o.mode.c_str(),
-              o.threads, o.threads == 1 ? "" : "s", machine().c_str());
+  if (ours) {
+    std::printf("%s: scene %s, %zu steps; %s, mode %s, %d thread%s; machine %s\n", o.recording.c_str(),
+                recording.scene().name.c_str(), recording.steps().size(), run.engine_name.c_str(), o.mode.c_str(),
+                o.threads, o.threads == 1 ? "" : "s", machine().c_str());
+  } else {
+    std::printf("%s: scene %s, %zu steps; %s (%s), one thread; machine %s\n", o.recording.c_str(),
+                recording.scene().name.c_str(), recording.steps().size(), c.label.c_str(), run.engine_name.c_str(),
+                machine().c_str());
+  }
   std::printf("Phases: %s\n\n", phases.rule().c_str());
   std::printf(
       "| phase | steps | detect (ms) | peak (ms, step) | prepare | full tracing | walks | gather | pairs | traced in "
@@ -124,7 +142,11 @@ int run_replay(const ReplayOptions& o) {
   Sum& all = sums.emplace_back();
   all.name = "all";
   for (uint64_t k = 0; k < run.steps.size(); ++k) all.add(k, run.steps[k]);
-  for (const Sum& s : sums) print_row(s);
+  for (const Sum& s : sums) print_row(s, ours);
+  if (!ours) {
+    std::printf("\nMeans per step; detect: every pair's collide, one thread; contacts as the library reports them (a peer has no stages or rays).\n");
+    return 0;
+  }
   print_devices(run);
   // Where the rays went: each counter of kRayCounters, per step, per phase.
   std::printf("\n| counter (per step) |");

@@ -302,6 +302,20 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   ASSERT_NE(last, std::string::npos) << tail.out;
   EXPECT_LT(last, tail.out.find("| all | 60 |")) << tail.out;
   EXPECT_NE(tail.out.find("| counter (per step) | A | B | last 7 | all |"), std::string::npos) << tail.out;
+  // A peer on the same steps: the same pairs a step as rtcd, contacts of
+  // its own, no stages or rays of ours.
+  const Outcome gimpact = run("replay " + recording + " --peer gimpact");
+  ASSERT_EQ(gimpact.code, 0) << gimpact.out;
+  EXPECT_NE(gimpact.out.find("GIMPACT (bullet-gimpact), one thread"), std::string::npos) << gimpact.out;
+  const size_t peer_all = gimpact.out.find("| all | 60 |");
+  ASSERT_NE(peer_all, std::string::npos) << gimpact.out;
+  EXPECT_NE(gimpact.out.find("| – | – | – | – | " + cells[8].substr(1, cells[8].size() - 2) + " | – |", peer_all),
+            std::string::npos)
+      << gimpact.out << "\n" << automatic.out;
+  EXPECT_EQ(gimpact.out.find("counter (per step)"), std::string::npos) << gimpact.out;
+  const Outcome fcl = run("replay " + recording + " --peer fcl --last 7");
+  ASSERT_EQ(fcl.code, 0) << fcl.out;
+  EXPECT_NE(fcl.out.find("| last 7 | 7 |"), std::string::npos) << fcl.out;
 
   const std::string junk = write("junk.rtcdrec", "RTCDREC1 and then nothing sensible");
   for (const auto& [args, fragment] : std::vector<std::pair<std::string, std::string>>{
@@ -314,7 +328,11 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
            {"replay " + junk, "junk.rtcdrec"},
            {"replay " + out + "/recording.rtcdrec --mode sideways", "sideways"},
            {"replay " + out + "/recording.rtcdrec --backend nosuch", "nosuch"},
-           {"replay " + out + "/recording.rtcdrec --last 61", "holds only 60 steps"}}) {
+           {"replay " + out + "/recording.rtcdrec --last 61", "holds only 60 steps"},
+           {"replay " + out + "/recording.rtcdrec --peer bullet", "gimpact or fcl"},
+           {"replay " + out + "/recording.rtcdrec --peer fcl --mode full", "excludes"},
+           {"replay " + out + "/recording.rtcdrec --peer gimpact --no-edge-contacts", "knobs are rtcd's"},
+           {"replay " + out + "/recording.rtcdrec --peer gimpact --judge-every 5", "knobs are rtcd's"}}) {
     const Outcome bad = run(args);
     EXPECT_EQ(bad.code, 2) << args << "\n" << bad.out;
     EXPECT_NE(bad.out.find(fragment), std::string::npos) << args << "\n" << bad.out;

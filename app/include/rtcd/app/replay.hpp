@@ -11,6 +11,7 @@ namespace rtcd::app {
 
 struct ReplayOptions {
   std::string recording;
+  std::string peer;  // "gimpact" or "fcl": that library on the same steps instead of rtcd
   std::string backend = "embree";
   std::string mode = "auto";
   int threads = 1;
