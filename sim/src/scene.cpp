@@ -262,8 +262,7 @@ Scene parse_scene(std::string_view json_text, const std::string& path, const Sce
   Scene s;
   s.path = path;
   s.name = root.string("name", std::filesystem::path(path).stem().string());
-  s.time_step = root.number("time_step", 1.0 / 60.0, 0.0, 10.0);
-  if (!(s.time_step > 0)) root.fail("time_step", "must be > 0");
+  s.time_step = root.number("time_step", 1.0 / 60.0, kMinTimeStep, 10.0);
   if (root.has("steps") && root.has("duration")) root.fail("steps", "and duration are both given; give one");
   if (root.has("duration")) {
     const double d = root.number("duration", 0.0, 0.0, 1e9);

@@ -637,6 +637,8 @@ const StepRecord& Simulation::step() {
   effects += seconds_since(t);
 
   m.world->broad = m.world->narrow = m.world->solver = 0;
+  // One variable step of the scene's length; below kMinTimeStep Bullet would take none.
+  static_assert(kMinTimeStep > SIMD_EPSILON);
   m.world->stepSimulation(btScalar(m.scene.time_step), 0, btScalar(m.scene.time_step));
   m.check_poses(index);
   ++m.counters.steps;

@@ -496,6 +496,8 @@ TEST(Sim, BadScenesNameTheKey) {
   expect_scene_error(R"({"effects": [], "colour": 1, )" + body + "}", "colour: unknown key");
   expect_scene_error(R"({"effects": [], "time_step": "fast", )" + body + "}", "time_step: must be a number");
   expect_scene_error(R"({"effects": [], "time_step": 0, )" + body + "}", "time_step");
+  // Bullet would take no step at all (scene fuzzer).
+  expect_scene_error(R"({"effects": [], "time_step": 1e-8, )" + body + "}", "time_step: is 1e-08, must be in [1e-06, 10]");
   expect_scene_error(R"({"effects": ["gravity", "wind"], )" + body + "}", "effects[1]: unknown effect \"wind\"");
   expect_scene_error(R"({"effects": ["friction"], )" + body + "}", "\"friction\" needs \"contacts\"");
   expect_scene_error(R"({"effects": ["contacts", "speculative"], )" + body + "}", "\"speculative\" needs \"predictive\"");

@@ -91,6 +91,11 @@ struct Ground {
   double friction = 0.5, restitution = 0.0;
 };
 
+// The shortest step a scene may ask for. Bullet, in single precision, takes
+// a step under its epsilon (about 1.2e-7 s) as no step at all: no contacts,
+// no motion.
+inline constexpr double kMinTimeStep = 1e-6;
+
 struct Scene {
   std::string name;
   std::string path;  // the file, for messages and relative mesh paths
