@@ -21,6 +21,7 @@ struct Sum {
   uint64_t steps = 0, peak_step = 0;
   double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
   size_t pairs = 0, pairs_full = 0, fallbacks = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+  size_t certified = 0, granted = 0, expired = 0;
   RayCounts counts;
 
   void add(uint64_t step, const experiments::ReplayStep& s) {
@@ -37,6 +38,9 @@ struct Sum {
     pairs += s.pairs;
     pairs_full += s.pairs_full;
     fallbacks += s.fallbacks;
+    certified += s.pairs_certified;
+    granted += s.certificates_granted;
+    expired += s.certificates_expired;
     counts += s.counts;
     contacts += s.contacts;
     judged += s.judged;
@@ -157,6 +161,14 @@ int run_replay(const ReplayOptions& o) {
   for (const RayCounter& c : kRayCounters) {
     std::printf("| %s |", c.name);
     for (const Sum& s : sums) std::printf(" %.0f |", double(s.counts.*c.field) / double(std::max<uint64_t>(s.steps, 1)));
+    std::printf("\n");
+  }
+  // The pairs that cast nothing (StepStats, Config::trace_separated_pairs off).
+  for (const auto& [name, field] : {std::pair{"pairs_certified", &Sum::certified},
+                                    std::pair{"certificates_granted", &Sum::granted},
+                                    std::pair{"certificates_expired", &Sum::expired}}) {
+    std::printf("| %s |", name);
+    for (const Sum& s : sums) std::printf(" %.1f |", double(s.*field) / double(std::max<uint64_t>(s.steps, 1)));
     std::printf("\n");
   }
   std::printf("\nMeans per step; prepare, full tracing, walks and gather are the stages of detect (StepStats); sent back: pairs traced in full because equation 2.1 ended their walks (the others traced in full are new); rays: vertex rays traced in full, predictive and walked (RayCounts::rays; edge rays are counted apart).\n");

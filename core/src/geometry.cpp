@@ -99,7 +99,9 @@ double max_displacement(const Pose& relative_at_full_step, const Pose& relative_
          rotation_angle(relative_at_full_step.orientation, relative_now.orientation) * max_radius;
 }
 
-const char* to_string(PairMode mode) { return mode == PairMode::full ? "full" : "iterative"; }
+const char* to_string(PairMode mode) {
+  return mode == PairMode::full ? "full" : mode == PairMode::iterative ? "iterative" : "certified";
+}
 const char* to_string(ContactKind kind) {
   return kind == ContactKind::vertex ? "vertex" : kind == ContactKind::edge ? "edge" : "sphere";
 }

@@ -4,9 +4,11 @@
 #include <algorithm>
 #include <cmath>
 #include <numeric>
+#include <mutex>
 #include <numbers>
 #include <sstream>
 
+#include "rtcd/distance_bound.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_gen.hpp"
 
@@ -38,6 +40,16 @@ void add_source(RaySources& s, const Eigen::Vector3d& origin, const Eigen::Vecto
 constexpr uint32_t kSourcesPerLeaf = 16;
 
 }  // namespace
+
+struct Shape::LazyBound {
+  std::once_flag once;
+  std::unique_ptr<DistanceBound> bound;
+};
+
+const DistanceBound& Shape::distance_bound() const {
+  std::call_once(bound_->once, [&] { bound_->bound = std::make_unique<DistanceBound>(*this); });
+  return *bound_->bound;
+}
 
 void RaySources::index() {
   nodes.clear();
@@ -84,7 +96,7 @@ void RaySources::index() {
   }
 }
 
-Shape::Shape(Mesh mesh) : geometry_(std::move(mesh)) {
+Shape::Shape(Mesh mesh) : geometry_(std::move(mesh)), bound_(std::make_shared<LazyBound>()) {
   const Mesh& m = std::get<Mesh>(geometry_);
   sources_.origins.assign(m.positions().begin(), m.positions().end());
   sources_.directions.reserve(m.vertex_count());
@@ -100,7 +112,7 @@ Shape::Shape(Mesh mesh) : geometry_(std::move(mesh)) {
   radius_ = m.radius();
 }
 
-Shape::Shape(Sphere sphere, double density) : geometry_(sphere) {
+Shape::Shape(Sphere sphere, double density) : geometry_(sphere), bound_(std::make_shared<LazyBound>()) {
   if (!std::isfinite(sphere.radius) || sphere.radius <= 0)
     throw UsageError("sphere radius " + std::to_string(sphere.radius) + " must be finite and > 0");
   check_size(sphere.radius, 2 * sphere.radius, "sphere radius");
@@ -122,7 +134,7 @@ Shape::Shape(Sphere sphere, double density) : geometry_(sphere) {
   radius_ = r;
 }
 
-Shape::Shape(Box box, double density) : geometry_(box) {
+Shape::Shape(Box box, double density) : geometry_(box), bound_(std::make_shared<LazyBound>()) {
   const Eigen::Vector3d h = box.half_extents;
   if (!h.allFinite() || (h.array() <= 0).any()) throw UsageError("box half extents must be finite and > 0");
   check_size(h.maxCoeff(), 2 * h.norm(), "box half extents");
@@ -156,7 +168,7 @@ Shape::Shape(Box box, double density) : geometry_(box) {
   radius_ = h.norm();
 }
 
-Shape::Shape(HalfSpace half_space) : geometry_(half_space) {
+Shape::Shape(HalfSpace half_space) : geometry_(half_space), bound_(std::make_shared<LazyBound>()) {
   bounds_ = {Eigen::Vector3d(-kMaxCoordinate, -kMaxCoordinate, -kMaxCoordinate),
              Eigen::Vector3d(kMaxCoordinate, kMaxCoordinate, 0.0)};
   radius_ = 0.0;

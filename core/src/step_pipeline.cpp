@@ -15,6 +15,7 @@
 #include "parallel.hpp"
 #include "rtcd/clock.hpp"
 #include "rtcd/criterion.hpp"
+#include "rtcd/distance_bound.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/kernel/classify.h"
 
@@ -27,6 +28,8 @@ std::string pair_text(BodyId a, BodyId b) { return "pair (" + std::to_string(a) 
 // kept outcomes worth turning into records (dozens of flops each) on several.
 constexpr size_t kParallelPairs = 1024;
 constexpr size_t kParallelFill = 1024;
+// Least steps a certificate must last at the pair's current speed.
+constexpr double kCertificateSteps = 4.0;
 
 // A shape as the host builds records from it: what the refinement and the
 // records need, converted to double once instead of at every ray.
@@ -219,10 +222,24 @@ class PipelineNarrowPhase final : public NarrowPhase {
     Pose relative_at_edge_test;
     // The executor's copy of a direction's rays lacks the edges held last step.
     bool held[2] = {false, false};
+    // Config::trace_separated_pairs off: a lower bound on the gap between the two
+    // surfaces at relative_at_certificate (0: not certified). The pair
+    // casts nothing while its motion since, plus its distance extension,
+    // stays under it.
+    double apart = 0.0;
+    Pose relative_at_certificate;
+    // A walking pair the bounds proved apart: traced in full next step, where
+    // no vertex inside either body shows neither holds the other.
+    bool promoted = false;
+    // A walking pair the bounds could not prove apart is tried again once it
+    // has moved this far from where it was tried.
+    Pose relative_at_attempt;
+    double retry_after = -1.0;  // < 0: never tried
   };
   // The step's two batches (Algorithm 2): pairs traced in full (new, sent
   // back by equation 2.1, or every pair in full mode), and pairs walked.
-  enum Batch : uint32_t { kTraced = 0, kWalked = 1 };
+  // Certified pairs are in neither.
+  enum Batch : uint32_t { kTraced = 0, kWalked = 1, kCertified = 2 };
   // A pair's step: its state and limits, and where its two jobs are, in
   // the host's order: batches_[batch].jobs[first] (a's rays), [first + 1] (b's).
   struct PairWork {
@@ -233,6 +250,10 @@ class PipelineNarrowPhase final : public NarrowPhase {
     bool hold_edges;  // walking pairs: their watched edges are not tested (Config::edge_retest_motion)
     Batch batch;
     uint32_t first;
+    Pose relative;  // lower id's frame in the higher id's, this step
+    bool expired;   // its certificate expired this step
+    bool granted;   // certified this step
+    double step_motion;  // equation 2.1 since the last step, when limits are derived (else 0)
   };
 
   Body& body_at(BodyId id) {
@@ -246,6 +267,9 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::span<const RayOutcome> walked(PairState& state, int direction, bool hold) const;
   void restore_held_edges(std::span<const BodyPair> pairs);
   void gather(std::span<const BodyPair> pairs, StepResult& out);
+  void certify(BodyPair pair, PairWork& work, const PairResult& result) const;
+  double apart(BodyId source, BodyId target, double cap, double floor) const;
+  double certificate_slack(BodyPair pair, const Pose& relative) const;
   void fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source, BodyId target, Side side,
             Contact*& contacts, PredictiveRay*& predictive) const;
   void fill_edge(const RayJob& job, const RayOutcome& o, BodyId source, BodyId target, Side side, Contact& c) const;
@@ -348,8 +372,14 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
   uint32_t jobs[2] = {0, 0};
   for (size_t i = 0; i < pairs.size(); ++i) {
     PairWork& w = work_[i];
+    out.stats.certificates_expired += w.expired;
+    if (w.batch == kCertified) {
+      ++out.stats.pairs_certified;
+      continue;
+    }
     const bool iterative = w.batch == kWalked;
-    out.stats.fallbacks_to_full += !w.fresh && config_.mode == Mode::automatic && !iterative;
+    out.stats.fallbacks_to_full += !w.fresh && config_.mode == Mode::automatic && !iterative && !w.expired &&
+                                   !w.state->promoted;
     ++(iterative ? out.stats.pairs_iterative : out.stats.pairs_full);
     w.first = jobs[w.batch];
     jobs[w.batch] += 2;
@@ -368,6 +398,10 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
     PairResult& pr = out.pairs[i];
     pr = PairResult{};
     pr.pair = p;
+    if (w.batch == kCertified) {
+      pr.mode = PairMode::certified;
+      return;
+    }
     pr.mode = iterative ? PairMode::iterative : PairMode::full;
     const BodyId edges = edge_side(p);
     for (uint32_t k = 0; k < 2; ++k) {
@@ -407,14 +441,30 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
     if (low.seen > 0 && low.seen + 1 == step_ && high.seen > 0 && high.seen + 1 == step_)
       motion = max_displacement(high.previous.inverse() * low.previous, relative, radius);
     w.limits = derive_limits(config_, shapes_[low.shape].scale, shapes_[high.shape].scale, motion);
+    w.step_motion = motion;
   } else {
     w.limits = {*config_.displacement_threshold, *config_.distance_extension, *config_.max_walk_steps};
+    w.step_motion = 0.0;
   }
   PairState& state = *w.state;
+  w.relative = relative;
+  w.expired = w.granted = false;
+  bool forced = false;  // to a full trace: an expired certificate, or a promotion
+  if (state.apart > 0.0) {
+    const double since = max_displacement(state.relative_at_certificate, relative, radius);
+    if (since + w.limits.distance_extension + certificate_slack(p, relative) < state.apart) {
+      w.batch = kCertified;
+      return;
+    }
+    state.apart = 0.0;
+    w.expired = forced = true;
+  }
+  if (state.promoted) forced = true;
   bool iterative = false;
   w.moved = w.fresh || config_.mode == Mode::full ? 0.0 : max_displacement(state.relative_at_full, relative, radius);
   if (!w.fresh && config_.mode == Mode::iterative) iterative = true;
   if (!w.fresh && config_.mode == Mode::automatic) iterative = w.moved <= w.limits.displacement_threshold;
+  if (forced) iterative = false;
   w.hold_edges = iterative && config_.edge_retest_motion &&
                  max_displacement(state.relative_at_edge_test, relative, radius) < *config_.edge_retest_motion;
   if (config_.edge_retest_motion && !w.hold_edges) state.relative_at_edge_test = relative;
@@ -514,10 +564,15 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
   RayTally step;
   for (size_t i = 0; i < pairs.size(); ++i) {
     const PairWork& w = work_[i];
+    PairResult& pr = out.pairs[i];
+    if (w.batch == kCertified) {
+      pr.first_contact = contacts;
+      pr.first_predictive = predictive;
+      continue;
+    }
     const RayBatch& batch = batches_[w.batch];
     RayTally pair = batch.tallies[w.first];
     pair += batch.tallies[w.first + 1];
-    PairResult& pr = out.pairs[i];
     pr.first_contact = contacts;
     pr.contact_count = pair.contacts;
     pr.first_predictive = predictive;
@@ -534,6 +589,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
 
   for_each_index(pairs.size(), outcomes >= kParallelFill, [&](size_t i) {
     const PairWork& w = work_[i];
+    if (w.batch == kCertified) return;
     const BodyPair p = pairs[i];
     PairResult& pr = out.pairs[i];
     Contact* contact = out.contacts.data() + pr.first_contact;
@@ -556,6 +612,111 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     }
     for (const Contact& contact : out.contacts_of(pr)) pr.max_depth = std::max(pr.max_depth, contact.depth);
   });
+
+  if (config_.trace_separated_pairs || config_.mode == Mode::full) return;
+  for_each_index(pairs.size(), pairs.size() >= kParallelPairs, [&](size_t i) { certify(pairs[i], work_[i], out.pairs[i]); });
+  for (const PairWork& w : work_) out.stats.certificates_granted += w.granted;
+}
+
+// Slack under a certificate for the kernel's float tests: far above their
+// resolution (1e-7 of the larger body, or of the coordinates of a body in
+// a half-space's frame).
+double PipelineNarrowPhase::certificate_slack(BodyPair p, const Pose& relative) const {
+  const double ra = shapes_[bodies_[p.a].shape].shape->radius(), rb = shapes_[bodies_[p.b].shape].shape->radius();
+  return 1e-5 * (ra + rb + relative.position.norm());
+}
+
+// A pair with nothing to report this step, proven apart by more than its
+// distance extension: certified when it was traced in full (no vertex of
+// either inside the other, so neither holds the other), promoted to a full
+// trace next step when it walked.
+void PipelineNarrowPhase::certify(BodyPair p, PairWork& w, const PairResult& pr) const {
+  PairState& state = *w.state;
+  state.promoted = false;
+  if (w.batch == kCertified || pr.contact_count + pr.predictive_count > 0) return;
+  const double radius = std::max(shapes_[bodies_[p.a].shape].shape->radius(), shapes_[bodies_[p.b].shape].shape->radius());
+  if (w.batch == kWalked && state.retry_after >= 0.0 &&
+      max_displacement(state.relative_at_attempt, w.relative, radius) < state.retry_after)
+    return;
+  const double need = w.limits.distance_extension + certificate_slack(p, w.relative);
+  // How far a proof reaches: as far again as the extension, or a quarter of
+  // the smaller body; features farther from the other's box are not looked at.
+  const double ra = shapes_[bodies_[p.a].shape].shape->radius(), rb = shapes_[bodies_[p.b].shape].shape->radius();
+  const double small = ra == 0.0 ? rb : rb == 0.0 ? ra : std::min(ra, rb);
+  const double cap = need + std::max(w.limits.distance_extension, 0.25 * small) + kCertificateSteps * w.step_motion;
+  // A certificate the pair's speed would spend within a few steps costs more
+  // full traces than it saves.
+  const double floor = need + kCertificateSteps * w.step_motion;
+  const double gap = std::min(apart(p.a, p.b, cap, floor), apart(p.b, p.a, cap, floor));
+  if (gap <= floor) {
+    state.relative_at_attempt = w.relative;
+    state.retry_after = std::max(need - gap, 0.1 * need);
+    return;
+  }
+  state.retry_after = -1.0;
+  if (w.batch == kWalked) {
+    state.promoted = true;
+    return;
+  }
+  state.apart = gap;
+  state.relative_at_certificate = w.relative;
+  w.granted = true;
+  for (int d : {0, 1}) {
+    state.tracked[d].clear();
+    state.resting[d].clear();
+    state.residence[d] = {};
+    state.held[d] = false;
+  }
+}
+
+// A lower bound on the distance from the source's surface to the target's,
+// from the source's features (vertices and edges, in pieces no longer than
+// the proof's reach) near the target's box, read off the target's distance
+// bound; at most `cap`. The closest points of two polyhedral surfaces are a
+// vertex and a face or two edges, so the two directions together bound the
+// gap. A sphere source: its centre's bound less its radius; a half-space
+// source adds nothing (the other body's vertices bound its gap). Stops once
+// the bound is at most `floor`.
+double PipelineNarrowPhase::apart(BodyId source, BodyId target, double cap, double floor) const {
+  const Shape& src = *shapes_[bodies_[source].shape].shape;
+  const Shape& dst = *shapes_[bodies_[target].shape].shape;
+  const Pose to_target = bodies_[target].pose.inverse() * bodies_[source].pose;
+  const Eigen::Matrix3d rotation = to_target.orientation.toRotationMatrix();
+  const Eigen::Vector3d& translation = to_target.position;
+  const DistanceBound& bound = dst.distance_bound();
+  if (std::holds_alternative<HalfSpace>(src.geometry())) return cap;
+  if (const auto* sphere = std::get_if<Sphere>(&src.geometry()))
+    return std::min(cap, bound.lower(translation) - sphere->radius);
+  const RaySources& rs = src.sources();
+  const double piece = std::max(cap - floor, 1e-300);
+  double gap = cap;
+  // A node's items lie within half its box's diagonal of its centre: one
+  // lookup there passes over all of them when they cannot lower the gap.
+  rs.visit_leaves(
+      [&](const Eigen::Vector3f& lo, const Eigen::Vector3f& hi) {
+        if (gap <= floor) return false;
+        const Eigen::Vector3d centre = 0.5 * (lo + hi).cast<double>();
+        return bound.lower(rotation * centre + translation) - 0.5 * (hi - lo).cast<double>().norm() < gap;
+      },
+      [&](uint32_t leaf) {
+        for (uint32_t item : rs.items_of(leaf)) {
+          if (gap <= floor) return;
+          if (item < rs.first_edge()) {
+            gap = std::min(gap, bound.lower(rotation * rs.origins[item].cast<double>() + translation));
+            continue;
+          }
+          const auto& e = rs.edges[item - rs.first_edge()];
+          const Eigen::Vector3d a = rotation * rs.origins[e[0]].cast<double>() + translation;
+          const Eigen::Vector3d b = rotation * rs.origins[e[1]].cast<double>() + translation;
+          const double length = (b - a).norm();
+          const int pieces = int(std::clamp(std::ceil(length / piece), 1.0, 64.0));
+          for (int k = 0; k < pieces; ++k) {
+            const Eigen::Vector3d middle = a + (b - a) * ((k + 0.5) / pieces);
+            gap = std::min(gap, bound.lower(middle) - 0.5 * length / pieces);
+          }
+        }
+      });
+  return gap;
 }
 
 void PipelineNarrowPhase::fill(const RayJob& job, std::span<const RayOutcome> outcomes, BodyId source_id,

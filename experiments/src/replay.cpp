@@ -80,6 +80,9 @@ class OursRunner final : public Runner {
     out.pairs_full = s.pairs_full;
     out.pairs_iterative = s.pairs_iterative;
     out.fallbacks = s.fallbacks_to_full;
+    out.pairs_certified = s.pairs_certified;
+    out.certificates_granted = s.certificates_granted;
+    out.certificates_expired = s.certificates_expired;
     out.counts = s;
     out.bytes_to_device = s.bytes_to_device;
     out.bytes_from_device = s.bytes_from_device;

@@ -125,7 +125,7 @@ class Pairs:
     a: npt.NDArray[np.uint32]
     b: npt.NDArray[np.uint32]
     colliding: npt.NDArray[np.bool_]
-    mode: npt.NDArray[np.uint8]          # 0 full, 1 iterative
+    mode: npt.NDArray[np.uint8]          # 0 full, 1 iterative, 2 certified
     max_depth: npt.NDArray[np.float64]
     first_contact: npt.NDArray[np.int64]
     contact_count: npt.NDArray[np.int64]

@@ -243,7 +243,7 @@ void bind_narrow_phase(py::module_& m) {
                    "Contacts and predictive rays of a step, one row each, grouped by pair (copies of the step's "
                    "C++ records). Columns as attributes or rays['depth']; dict(rays) for pandas.",
                    kRayColumns);
-  bind_table<Pairs>(m, "Pairs", "One row per input pair, in input order (copies). mode: 0 full, 1 iterative.",
+  bind_table<Pairs>(m, "Pairs", "One row per input pair, in input order (copies). mode: 0 full, 1 iterative, 2 certified.",
                     kPairColumns);
 
   py::class_<PyStep>(m, "StepResult", R"(What one detect() returned.

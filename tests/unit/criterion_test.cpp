@@ -74,7 +74,7 @@ TEST(Pose, CheckedRejectsNonFiniteAndNonUnit) {
 // The table is the configuration: every knob reads and writes its field,
 // and validate() holds each number to the table's range, naming the knob.
 TEST(Config, EveryKnobOfTheTable) {
-  ASSERT_EQ(rtcd::knobs().size(), 12u) << "a Config field without a knob, or a knob without a field";
+  ASSERT_EQ(rtcd::knobs().size(), 13u) << "a Config field without a knob, or a knob without a field";
   for (const rtcd::Knob& k : rtcd::knobs()) {
     SCOPED_TRACE(k.name);
     EXPECT_EQ(rtcd::find_knob(k.name), &k);

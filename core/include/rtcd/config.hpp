@@ -40,6 +40,7 @@ struct Config {
   bool edges_beside_contacts = true;  // off: walking steps rest edges while the pair has vertex contacts
   bool edges_both_sides = true;       // off: a pair of meshes tests the finer mesh's edges only
   std::optional<double> edge_retest_motion;  // walking steps; unset: every watched edge every step
+  bool trace_separated_pairs = true;  // off: pairs proven apart cast nothing until they move past the proof
   bool nearest_surface = true;   // off: the thesis' ray contact
   bool projected = true;         // what Contact::push holds for ray contacts
   Mode mode = Mode::automatic;

@@ -87,7 +87,9 @@ struct PredictiveRay : RayRecord {
   double distance = 0.0;
 };
 
-enum class PairMode : uint8_t { full, iterative };
+// certified: proven apart by the shapes' distance bounds at an earlier full
+// step, and not moved past that proof's margin since: no rays this step.
+enum class PairMode : uint8_t { full, iterative, certified };
 const char* to_string(PairMode mode);
 
 struct PairResult {
@@ -162,6 +164,7 @@ struct DeviceWork {
 struct StepStats : RayCounts {
   size_t pairs_full = 0, pairs_iterative = 0;
   size_t fallbacks_to_full = 0;
+  size_t pairs_certified = 0, certificates_granted = 0, certificates_expired = 0;
   size_t bytes_to_device = 0, bytes_from_device = 0;
   // Where the rays ran: one entry per device of a device backend, in its
   // order (empty on the CPU backends); rays the CPU ran in a device's stead
@@ -189,6 +192,14 @@ inline constexpr StepCounter kStepCounters[] = {
     {"pairs_iterative", &StepStats::pairs_iterative, "pairs walked from their tracked rays"},
     {"fallbacks_to_full", &StepStats::fallbacks_to_full,
      "pairs with state that equation 2.1 sent back to full tracing (automatic mode)"},
+    {"pairs_certified", &StepStats::pairs_certified,
+     "pairs skipped without a ray: proven apart at an earlier full step, moved less than that proof's margin since "
+     "(Config::trace_separated_pairs off)"},
+    {"certificates_granted", &StepStats::certificates_granted,
+     "pairs traced in full with nothing to report that the distance bounds proved apart by more than the distance "
+     "extension"},
+    {"certificates_expired", &StepStats::certificates_expired,
+     "certified pairs whose motion passed their margin, traced in full this step"},
     {"bytes_to_device", &StepStats::bytes_to_device, "bytes copied from the host to the devices (0 on the CPU)"},
     {"bytes_from_device", &StepStats::bytes_from_device, "bytes copied from the devices to the host (0 on the CPU)"},
 };

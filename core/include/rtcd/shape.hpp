@@ -109,6 +109,8 @@ void RaySources::visit_leaves(const MayHold& may_hold, const VisitLeaf& visit_le
   }
 }
 
+class DistanceBound;
+
 class Shape {
  public:
   using Geometry = std::variant<Mesh, Sphere, Box, HalfSpace>;
@@ -130,12 +132,17 @@ class Shape {
   const RaySources& sources() const { return sources_; }
   const Aabb& bounds() const { return bounds_; }
   double radius() const { return radius_; }
+  // Built on first use, once, and shared by every narrow phase and copy of
+  // this shape (rtcd/distance_bound.hpp); safe to call from any thread.
+  const DistanceBound& distance_bound() const;
 
  private:
   Geometry geometry_;
   RaySources sources_;
   Aabb bounds_;
   double radius_ = 0.0;
+  struct LazyBound;
+  std::shared_ptr<LazyBound> bound_;
 };
 
 RTCD_PUBLIC_END

@@ -50,6 +50,8 @@ struct ReplayStep {
   size_t pairs = 0, colliding = 0, contacts = 0;
   size_t pairs_full = 0, pairs_iterative = 0;
   size_t fallbacks = 0;  // of pairs_full, those equation 2.1 sent back (the rest are new)
+  // Ours: pairs skipped on a certificate, certificates granted, expired (StepStats).
+  size_t pairs_certified = 0, certificates_granted = 0, certificates_expired = 0;
   RayCounts counts;       // ours: the step's rays by what they did (kRayCounters)
   double depth_sum = 0;  // summed depth of every contact as the engine reports it
   // Ours: a digest of every contact's bodies, kind, vertex or edge and face,

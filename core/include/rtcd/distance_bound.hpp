@@ -1,0 +1,60 @@
+// A lower bound on how far a point lies from a shape's surface, read in
+// O(1): what proves a pair of bodies apart without casting a ray
+// (docs/ARCHITECTURE.md, Pairs certified apart). Unsigned: it says nothing
+// of inside or outside, so open meshes get one too.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "rtcd/export.hpp"
+#include "rtcd/geometry.hpp"
+
+namespace rtcd {
+RTCD_PUBLIC_BEGIN
+
+class Shape;
+
+class DistanceBound {
+ public:
+  // Meshes: a grid of nodes over the mesh's box grown by kPadding of its
+  // radius, at most kMaxNodes of them; each node holds the exact distance
+  // to the nearest triangle (computed in double within two cells of the
+  // surface, beyond that a distance transform's lower bound), rounded down
+  // to float. Volumes: closed form, no grid.
+  explicit DistanceBound(const Shape& shape);
+
+  // A lower bound on the distance from p (the shape's frame) to its
+  // surface: max over the 8 nodes of p's cell of node value - |p - node|
+  // (the distance is 1-Lipschitz), and never less than p's distance to the
+  // mesh's box. At most the exact distance; on a mesh, at most about a cell's
+  // diagonal below it near the surface.
+  double lower(const Eigen::Vector3d& p) const;
+  // lower(p) > r, without square roots where it can: one test per walking edge.
+  bool beyond(const Eigen::Vector3d& p, double r) const;
+
+  // The grid: nodes per axis (0 for volumes), cell size, bytes held.
+  std::array<int, 3> nodes() const { return nodes_; }
+  double cell() const { return cell_; }
+  size_t bytes() const { return values_.size() * sizeof(float); }
+
+  static constexpr double kPadding = 0.5;
+  static constexpr size_t kMaxNodes = size_t(1) << 18;
+
+ private:
+  enum class Kind { grid, sphere, box, half_space } kind_ = Kind::grid;
+  Aabb bounds_;               // meshes: the mesh's box; box: [-h, h]
+  double radius_ = 0.0;       // sphere
+  Eigen::Vector3d origin_ = Eigen::Vector3d::Zero();  // node (0, 0, 0)
+  double cell_ = 0.0;
+  std::array<int, 3> nodes_{0, 0, 0};
+  std::vector<float> values_;  // x fastest
+
+  float at(int x, int y, int z) const { return values_[(size_t(z) * nodes_[1] + y) * nodes_[0] + x]; }
+};
+
+RTCD_PUBLIC_END
+}  // namespace rtcd
