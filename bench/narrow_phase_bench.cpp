@@ -9,6 +9,8 @@
 #include <tuple>
 
 #include "rtcd/backend.hpp"
+#include "rtcd/distance_bound.hpp"
+#include "rtcd/mesh_gen.hpp"
 
 #include <benchmark/benchmark.h>
 
@@ -96,6 +98,20 @@ BENCHMARK(full_basic)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(full_embree)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(iterative)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
 BENCHMARK(iterative_unverified)->Arg(1)->Arg(64)->Unit(benchmark::kMicrosecond);
+
+// A mesh's distance bound built from nothing (Shape::distance_bound), one
+// core, on concave blobs of /triangles; the bytes it holds as a counter.
+void distance_bound(benchmark::State& state) {
+  const Mesh mesh = gen::concave_blob(int(state.range(0)), 1, 1.0);
+  size_t bytes = 0;
+  for (auto _ : state) {
+    const Shape shape(mesh);
+    bytes = shape.distance_bound().bytes();
+    benchmark::DoNotOptimize(bytes);
+  }
+  state.counters["bytes"] = double(bytes);
+}
+BENCHMARK(distance_bound)->Arg(902)->Arg(20000)->Arg(200000)->Unit(benchmark::kMillisecond);
 
 // An OpenCL variant on state.range(1) devices: the first one, or all.
 void opencl(benchmark::State& state, const std::string& variant, Mode mode) {

@@ -20,8 +20,8 @@ class Shape;
 
 class DistanceBound {
  public:
-  // Meshes: a grid of nodes over the mesh's box grown by kPadding of its
-  // radius, at most kMaxNodes of them; each node holds the exact distance
+  // Meshes: a grid of nodes over the mesh's box grown by kPadding times half its
+  // diagonal, at most kMaxNodes of them; each node holds the exact distance
   // to the nearest triangle (computed in double within two cells of the
   // surface, beyond that a distance transform's lower bound), rounded down
   // to float. Volumes: closed form, no grid.
