@@ -304,8 +304,8 @@ class OpenClExecutor final : public RayExecutor {
   // spread over the devices.
   void add(Device& d, uint32_t j, const RayJob& job, const Config& config) {
     rtcd_device_job dj{};
-    const size_t items = job.overlap.empty() ? 0 : job.iterative ? job.tracked.size() : mark_near_leaves(d, job, dj);
     dj.params = make_trace_params(job, *shapes_[job.source], *shapes_[job.target], config);
+    const size_t items = job.overlap.empty() ? 0 : job.iterative ? job.tracked.size() : mark_near_leaves(d, job, dj);
     dj.source = job.source;
     dj.target = job.target;
     dj.first_item = d.items;
@@ -335,7 +335,7 @@ class OpenClExecutor final : public RayExecutor {
     d.host_near.resize(d.host_near.size() + (rs.nodes.size() + 31) / 32, 0);
     rtcd_uint* bits = d.host_near.data() + dj.first_near;
     size_t items = 0;
-    visit_near_leaves(job, rs, [&](uint32_t n) {
+    visit_near_leaves(job, rs, shapes_[job.target]->distance_bound(), edge_reach(dj.params), [&](uint32_t n) {
       bits[n / 32] |= rtcd_uint(1) << (n % 32);
       items += rs.items_of(n).size();
     });

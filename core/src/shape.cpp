@@ -38,6 +38,9 @@ void add_source(RaySources& s, const Eigen::Vector3d& origin, const Eigen::Vecto
 
 // Origins per leaf: a leaf's origins are tested one by one.
 constexpr uint32_t kSourcesPerLeaf = 16;
+// Edges per leaf: fewer, so a distance bound turns away more of them by
+// whole leaves (cpu_executor.hpp, visit_near_leaves).
+constexpr uint32_t kEdgesPerLeaf = 4;
 
 }  // namespace
 
@@ -82,7 +85,15 @@ void RaySources::index() {
     }
     nodes[i].lo = lo;
     nodes[i].hi = hi;
-    if (end - begin <= kSourcesPerLeaf) continue;
+    // The root: origins apart from edges (order is still the identity).
+    const bool split_kinds = i == 0 && first_edge() > 0 && first_edge() < items;
+    if (end - begin <= (begin >= first_edge() && i > 0 ? kEdgesPerLeaf : kSourcesPerLeaf) && !split_kinds) continue;
+    nodes[i].child = uint32_t(nodes.size());
+    if (split_kinds) {
+      nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), begin, first_edge(), 0});
+      nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), first_edge(), end, 0});
+      continue;
+    }
     int axis = 0;
     (hi - lo).maxCoeff(&axis);
     const uint32_t mid = begin + (end - begin) / 2;
@@ -90,7 +101,6 @@ void RaySources::index() {
     std::nth_element(order.begin() + begin, order.begin() + mid, order.begin() + end, [&](uint32_t a, uint32_t b) {
       return centre(a) < centre(b) || (centre(a) == centre(b) && a < b);
     });
-    nodes[i].child = uint32_t(nodes.size());
     nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), begin, mid, 0});
     nodes.push_back({Eigen::Vector3f::Zero(), Eigen::Vector3f::Zero(), mid, end, 0});
   }

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <type_traits>
 #include <variant>
 #include <vector>
 
@@ -68,7 +69,9 @@ struct RaySources {
 
   // A balanced binary tree over a permutation of the items: a node's are
   // order[begin, end); an inner node's children are nodes[child] and
-  // nodes[child + 1]; child 0 marks a leaf (the root is node 0).
+  // nodes[child + 1]; child 0 marks a leaf (the root is node 0). The root
+  // splits origins from the rest, so every other node holds items of one
+  // kind.
   struct Node {
     Eigen::Vector3f lo, hi;
     uint32_t begin, end, child;
@@ -78,10 +81,15 @@ struct RaySources {
 
   // Builds the tree over the items; called once they are all in.
   void index();
+  // Whether node n holds only mesh or box edges (no origin, no sphere item).
+  bool edges_only(const Node& n) const {
+    return sphere_radius == 0.0f && n.begin < n.end && order[n.begin] >= first_edge() &&
+           order[n.end - 1] >= first_edge();
+  }
   // Calls visit_leaf(n) for every leaf nodes[n] reached through nodes whose
-  // box passes may_hold(lo, hi): a test that may pass a box holding no
-  // wanted origin but never fails one holding one. Each leaf at most once,
-  // in no particular order.
+  // box passes may_hold(lo, hi) (or may_hold(node)): a test that may pass a
+  // box holding no wanted origin but never fails one holding one. Each leaf
+  // at most once, in no particular order.
   template <class MayHold, class VisitLeaf>
   void visit_leaves(const MayHold& may_hold, const VisitLeaf& visit_leaf) const;
   // The items of node n.
@@ -99,7 +107,11 @@ void RaySources::visit_leaves(const MayHold& may_hold, const VisitLeaf& visit_le
   while (top > 0) {
     const uint32_t index = stack[--top];
     const Node& n = nodes[index];
-    if (!may_hold(n.lo, n.hi)) continue;
+    if constexpr (std::is_invocable_v<const MayHold&, const Node&>) {
+      if (!may_hold(n)) continue;
+    } else {
+      if (!may_hold(n.lo, n.hi)) continue;
+    }
     if (n.child != 0) {
       stack[top++] = n.child;
       stack[top++] = n.child + 1;
