@@ -152,7 +152,8 @@ class NarrowPhase:
                  distance_extension: float | None = None, predictive: bool = True,
                  verify_walks: bool = True, edge_contacts: bool = True, edges_beside_contacts: bool = True,
                  edges_both_sides: bool = True,
-                 edge_retest_motion: float | None = None, nearest_surface: bool = True,
+                 edge_retest_motion: float | None = None, trace_separated_pairs: bool = True,
+                 nearest_surface: bool = True,
                  projected: bool = True) -> None: ...
     @property
     def name(self) -> str: ...

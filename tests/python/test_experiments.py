@@ -148,7 +148,7 @@ def narrow_phase_keywords() -> set[str]:
 # A value of each knob other than its default, to see it arrive.
 KNOB_VALUES = {"max_walk_steps": 17, "displacement_threshold": 0.01, "distance_extension": 0.03, "predictive": False,
                "verify_walks": False, "edge_contacts": False, "edges_beside_contacts": False, "edges_both_sides": False,
-               "edge_retest_motion": 0.004,
+               "edge_retest_motion": 0.004, "trace_separated_pairs": False,
                "nearest_surface": False, "projected": False, "mode": "iterative"}
 
 
