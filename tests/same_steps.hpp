@@ -23,11 +23,12 @@ struct Scene {
   size_t pairs = 16;
   size_t steps = 4;
   uint64_t seed = 7;
+  Config config = {};  // every knob but the mode
 };
 
 inline std::vector<StepResult> run_scene(const std::string& backend, const Scene& s) {
   const validation::Family f = validation::make_family(s.family);
-  Config config;
+  Config config = s.config;
   config.mode = s.mode;
   auto narrow = make_narrow_phase(backend, config);
   const ShapeId sa = narrow->add_shape(f.a), sb = narrow->add_shape(f.b);
@@ -94,6 +95,9 @@ inline void expect_same_step(const StepResult& x, const StepResult& y, const std
   EXPECT_EQ(a.pairs_full, b.pairs_full);
   EXPECT_EQ(a.pairs_iterative, b.pairs_iterative);
   EXPECT_EQ(a.fallbacks_to_full, b.fallbacks_to_full);
+  EXPECT_EQ(a.pairs_certified, b.pairs_certified);
+  EXPECT_EQ(a.certificates_granted, b.certificates_granted);
+  EXPECT_EQ(a.certificates_expired, b.certificates_expired);
   EXPECT_EQ(a.candidates, b.candidates);
   EXPECT_EQ(a.rays_full, b.rays_full);
   EXPECT_EQ(a.rays_predictive, b.rays_predictive);

@@ -116,6 +116,22 @@ std::string case_name(const ::testing::TestParamInfo<std::tuple<std::string, Mod
 INSTANTIATE_TEST_SUITE_P(Families, BasicVariant, ::testing::Combine(kFamilies, kModes), case_name);
 INSTANTIATE_TEST_SUITE_P(Families, BvhVariant, ::testing::Combine(kFamilies, kModes), case_name);
 
+// Pairs certified apart (trace_separated_pairs off) are decided on the host
+// from the same outcomes: the devices certify, skip and expire the same
+// pairs as basic.
+TEST(OpenCl, CertifiedPairsEqualBasic) {
+  Scene scene{"concave", Mode::automatic, 32, 8};
+  scene.config.trace_separated_pairs = false;
+  for (const std::string backend : {"opencl", "opencl-basic"}) {
+    SCOPED_TRACE(backend);
+    const auto device = run_scene(backend, scene);
+    EXPECT_GT(expect_same_run(device, run_scene("basic", scene)), 0u);
+    size_t certified = 0;
+    for (const StepResult& r : device) certified += r.stats.pairs_certified;
+    EXPECT_GT(certified, 0u) << "no pair was certified: the comparison would not cover certificates";
+  }
+}
+
 // The device's BVH traversal is plain C: checked on the host against the
 // brute force, ray by ray and point by point, with the tree's shape.
 TEST(Bvh, AnswersAsTheBruteForce) {
