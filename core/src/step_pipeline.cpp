@@ -649,6 +649,9 @@ void PipelineNarrowPhase::certify(BodyPair p, PairWork& w, const PairResult& pr)
   const double floor = need + kCertificateSteps * w.step_motion;
   const double gap = std::min(apart(p.a, p.b, cap, floor), apart(p.b, p.a, cap, floor));
   if (gap <= floor) {
+    // Apart but moving too fast: tried again next step. Too near: once it
+    // has moved as far as the gap lacks.
+    if (gap > need) return;
     state.relative_at_attempt = w.relative;
     state.retry_after = std::max(need - gap, 0.1 * need);
     return;

@@ -128,21 +128,41 @@ struct Allocations {
   size_t cxx = 0;   // through operator new
 };
 
-// Allocations made by `steps` steps after `warmup` steps, B jittering by 1e-3.
-Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, size_t& contacts) {
+// What the measured steps did: contacts of the last, the steps in which
+// every pair walked and some ray was walked, the pairs skipped on a
+// certificate and the certificates granted and expired, summed.
+struct Measured {
+  size_t contacts = 0, walked_steps = 0, certified = 0, granted = 0, expired = 0;
+};
+
+// Allocations made by `steps` steps after `warmup` steps, B moved by
+// jitter(step) along y.
+template <class Jitter>
+Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measured& m, const Jitter& jitter) {
   StepResult result;
   Allocations before;
   for (int step = 0; step < warmup + steps; ++step) {
     if (step == warmup) before = {allocations.load(), cxx_allocations.load()};
     for (size_t i = 0; i < s.pairs.size(); ++i) {
       Pose p = s.b_poses[i];
-      p.position.y() += step % 2 ? 1e-3 : 0.0;
+      p.position.y() += jitter(step);
       s.narrow->set_pose(s.pairs[i].b, p);
     }
     s.narrow->detect(s.pairs, result);
+    if (step < warmup) continue;
+    const bool all_walked = std::all_of(result.pairs.begin(), result.pairs.end(),
+                                        [](const PairResult& p) { return p.mode == PairMode::iterative; });
+    m.walked_steps += all_walked && result.stats.rays_iterative > 0;
+    m.certified += result.stats.pairs_certified;
+    m.granted += result.stats.certificates_granted;
+    m.expired += result.stats.certificates_expired;
   }
-  contacts = result.contacts.size();
+  m.contacts = result.contacts.size();
   return {allocations.load() - before.heap, cxx_allocations.load() - before.cxx};
+}
+// B jittering by 1e-3.
+Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measured& m) {
+  return allocations_in_steady_steps(s, warmup, steps, m, [](int step) { return step % 2 ? 1e-3 : 0.0; });
 }
 
 TEST(Allocation, TheCounterSeesAllocations) {
@@ -169,8 +189,8 @@ class SteadyStep : public ::testing::TestWithParam<std::tuple<std::string, Mode,
 TEST_P(SteadyStep, AllocatesNothing) {
   const auto& [backend, mode, count] = GetParam();
   Steady s = make_steady(backend, mode, count);
-  size_t contacts = 0;
-  const Allocations made = allocations_in_steady_steps(s, 4, 10, contacts);
+  Measured m;
+  const Allocations made = allocations_in_steady_steps(s, 4, 10, m);
   EXPECT_EQ(made.cxx, 0u) << "C++ allocations in 10 steady steps";
   if (backend.starts_with("opencl")) {
     // The OpenCL runtime's own, reported: not ours to remove. Bounded by
@@ -184,7 +204,40 @@ TEST_P(SteadyStep, AllocatesNothing) {
   } else {
     EXPECT_EQ(made.heap, 0u) << "heap allocations in 10 steady steps";
   }
-  EXPECT_GT(contacts, 0u) << "the bodies must be in contact for the test to mean anything";
+  EXPECT_GT(m.contacts, 0u) << "the bodies must be in contact for the test to mean anything";
+  // The walking modes' measured steps walk: their buffers are the walks'.
+  if (mode != Mode::full) EXPECT_EQ(m.walked_steps, 10u) << "measured steps in which every pair walked";
+}
+
+// Pairs apart certified (trace_separated_pairs off), their certificates
+// expiring and granted again as B jumps 0.4 (past the margin) every four
+// steps: skipped, expired and granted steps allocate nothing either.
+TEST(Allocation, CertifiedStepsAllocateNothing) {
+  for (const std::string backend : {"basic", "embree"}) {
+    SCOPED_TRACE(backend);
+    Config config;
+    config.trace_separated_pairs = false;
+    config.distance_extension = 0.05;
+    config.displacement_threshold = 0.02;
+    Steady s{make_narrow_phase(backend, config), {}, {}};
+    const ShapeId a = s.narrow->add_shape(std::make_shared<Shape>(gen::concave_blob(300, 1)));
+    const ShapeId b = s.narrow->add_shape(std::make_shared<Shape>(gen::concave_blob(300, 2)));
+    for (int i = 0; i < 8; ++i) {
+      Pose pa, pb;
+      pa.position = {10.0 * i, 0, 0};
+      pb.position = {10.0 * i + 3.0, 0.1, 0.05};  // apart
+      s.pairs.push_back({s.narrow->add_body(a, pa), s.narrow->add_body(b, pb)});
+      s.b_poses.push_back(pb);
+    }
+    Measured m;
+    const Allocations made =
+        allocations_in_steady_steps(s, 8, 16, m, [](int step) { return step % 8 < 4 ? 0.0 : 0.4; });
+    EXPECT_EQ(made.cxx, 0u) << "C++ allocations in 16 steps";
+    EXPECT_EQ(made.heap, 0u) << "heap allocations in 16 steps";
+    EXPECT_GT(m.certified, 0u) << "pairs skipped";
+    EXPECT_GT(m.granted, 0u) << "certificates granted";
+    EXPECT_GT(m.expired, 0u) << "certificates expired";
+  }
 }
 
 std::string name(const ::testing::TestParamInfo<SteadyStep::ParamType>& info) {

@@ -370,9 +370,12 @@ TEST_P(ConformanceBesideBasic, AgreesWithBasic) {
                       Eigen::Quaterniond(1, u(g), u(g), u(g)));
     const Pose b1 = at(b.position + Eigen::Vector3d(0.01, -0.01, 0.005), b.orientation);
     PairRig mine(GetParam(), blob_a, blob_b), reference("basic", blob_a, blob_b);
-    for (const Pose& pb : {b, b1}) {
+    for (int step = 0; step < 2; ++step) {
+      const Pose& pb = step == 0 ? b : b1;
       const StepResult x = mine.step(a, pb), y = reference.step(a, pb);
       ASSERT_EQ(x.pairs[0].mode, y.pairs[0].mode);
+      // The first step traces in full; the second, 1.5 cm on, walks.
+      ASSERT_EQ(x.pairs[0].mode, step == 0 ? PairMode::full : PairMode::iterative) << "case " << i;
       ASSERT_EQ(x.contacts.size(), y.contacts.size()) << "case " << i;
       for (size_t k = 0; k < x.contacts.size(); ++k) {
         EXPECT_EQ(x.contacts[k].source, y.contacts[k].source);
