@@ -285,12 +285,17 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   const Outcome automatic = run("replay " + recording + " --displacement-threshold 0.01");
   ASSERT_EQ(automatic.code, 0) << automatic.out;
   EXPECT_NE(automatic.out.find("mode auto, 1 thread;"), std::string::npos) << automatic.out;
-  const size_t row = automatic.out.find("| all | 60 |");
-  ASSERT_NE(row, std::string::npos) << automatic.out;
-  std::vector<std::string> cells;
-  std::stringstream line(automatic.out.substr(row + 1, automatic.out.find('\n', row) - row - 1));
-  for (std::string cell; std::getline(line, cell, '|');) cells.push_back(cell);
-  ASSERT_GE(cells.size(), 11u) << automatic.out;
+  // The cells of a replay's "all" row: 2 detect, 8 pairs, 12 contacts.
+  auto all_row = [](const std::string& out) {
+    std::vector<std::string> cells;
+    const size_t row = out.find("| all | 60 |");
+    if (row == std::string::npos) return cells;
+    std::stringstream line(out.substr(row + 1, out.find('\n', row) - row - 1));
+    for (std::string cell; std::getline(line, cell, '|');) cells.push_back(cell);
+    return cells;
+  };
+  const std::vector<std::string> cells = all_row(automatic.out);
+  ASSERT_GE(cells.size(), 13u) << automatic.out;
   const double traced_in_full = std::stod(cells[9]), sent_back = std::stod(cells[10]);
   EXPECT_GT(sent_back, 0.0) << automatic.out;
   EXPECT_LE(sent_back, traced_in_full) << automatic.out;
@@ -315,7 +320,19 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   EXPECT_EQ(gimpact.out.find("counter (per step)"), std::string::npos) << gimpact.out;
   const Outcome fcl = run("replay " + recording + " --peer fcl --last 7");
   ASSERT_EQ(fcl.code, 0) << fcl.out;
+  EXPECT_NE(fcl.out.find("FCL (fcl), one thread"), std::string::npos) << fcl.out;
   EXPECT_NE(fcl.out.find("| last 7 | 7 |"), std::string::npos) << fcl.out;
+  // Each peer ran: time spent and contacts found, FCL's count its own
+  // (GIMPACT, like rtcd, counts the vertices under the ground here).
+  const std::vector<std::string> by_gimpact = all_row(gimpact.out), by_fcl = all_row(fcl.out);
+  ASSERT_GE(by_gimpact.size(), 13u) << gimpact.out;
+  ASSERT_GE(by_fcl.size(), 13u) << fcl.out;
+  for (const auto* peer : {&by_gimpact, &by_fcl}) {
+    EXPECT_GT(std::stod((*peer)[2]), 0.0) << "detect";
+    EXPECT_GT(std::stod((*peer)[12]), 0.0) << "contacts";
+  }
+  EXPECT_NE(std::stod(by_fcl[12]), std::stod(by_gimpact[12]));
+  EXPECT_NE(std::stod(by_fcl[12]), std::stod(cells[12]));
 
   const std::string junk = write("junk.rtcdrec", "RTCDREC1 and then nothing sensible");
   for (const auto& [args, fragment] : std::vector<std::pair<std::string, std::string>>{
