@@ -7,6 +7,7 @@
 // edges are common) or raw float/double bits.
 #pragma once
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cstdint>
@@ -17,6 +18,8 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
+#include <variant>
 #include <vector>
 
 #include <fuzzer/FuzzedDataProvider.h>
@@ -199,11 +202,35 @@ inline void dump(const std::filesystem::path& dir, const Shape& a, const Shape& 
       std::fprintf(f, "step %zu pose %s: %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", s, name, p->position.x(),
                    p->position.y(), p->position.z(), p->orientation.w(), p->orientation.x(), p->orientation.y(),
                    p->orientation.z());
-  // -1: derived per pair.
-  std::fprintf(f, "mode %s max_walk_steps %lld distance_extension %.17g displacement_threshold %.17g predictive %d projected %d\n",
-               to_string(c.mode), c.max_walk_steps ? (long long)*c.max_walk_steps : -1LL,
-               c.distance_extension.value_or(-1.0), c.displacement_threshold.value_or(-1.0), c.predictive, c.projected);
+  // Every knob of the table, as rtcd knobs names it.
+  for (const Knob& k : knobs()) std::fprintf(f, "%s %s\n", k.name, to_string(k.get(c)).c_str());
   std::fclose(f);
+}
+
+// Every knob of the table not drawn above, from bytes after the rest, so a
+// knob added to the table is fuzzed the day it is: a switch flipped from
+// its default, a length set (a share of the smaller body's size, within
+// its range) or left to its default. An input that ends before them keeps
+// the defaults, so earlier corpora decode as they did.
+inline void read_other_knobs(Reader& r, double size, Config& config) {
+  static constexpr std::string_view kDrawn[] = {"max_walk_steps", "distance_extension", "displacement_threshold",
+                                                "mode", "predictive", "projected"};
+  for (const Knob& k : knobs()) {
+    if (std::find(std::begin(kDrawn), std::end(kDrawn), k.name) != std::end(kDrawn)) continue;
+    switch (k.type) {
+      case KnobType::flag:
+        if (r.flag()) k.set(config, !std::get<bool>(k.get(config)));
+        break;
+      case KnobType::length:
+        if (r.flag()) k.set(config, std::clamp(size * r.range<uint16_t>(0, 65535) / 65535.0, k.min, k.max));
+        break;
+      case KnobType::count:
+        if (r.flag()) k.set(config, double(r.range<uint32_t>(uint32_t(k.min), uint32_t(std::min(k.max, 4096.0)))));
+        break;
+      case KnobType::mode:
+        break;
+    }
+  }
 }
 
 // Nothing when the input names an invalid body or pose (rejected by design).
@@ -238,6 +265,7 @@ inline std::optional<PairCase> read_pair_case(const uint8_t* data, size_t length
     poses_a.push_back(*pose_a);
     poses_b.push_back(moved(r, poses_b.back()));
   }
+  read_other_knobs(r, std::min(size_of(*shape_a), size_of(*shape_b)), config);
 
   c.shape_a = shape_a;
   c.shape_b = shape_b;
