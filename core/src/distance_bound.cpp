@@ -73,13 +73,14 @@ DistanceBound::DistanceBound(const Shape& shape) {
   const Aabb box = bounds_.grown(kPadding * 0.5 * size.norm());
   const Eigen::Vector3d extent = box.max - box.min;
   // The finest cell whose nodes fit the budget.
-  double cell = std::cbrt(extent.prod() / double(kMaxNodes));
+  const double budget = double(max_nodes(mesh.triangle_count()));
+  double cell = std::cbrt(extent.prod() / budget);
   auto count = [&](double c) {
     std::array<int, 3> n;
     for (int a = 0; a < 3; ++a) n[a] = int(std::ceil(extent[a] / c)) + 1;
     return n;
   };
-  while (double(count(cell)[0]) * count(cell)[1] * count(cell)[2] > double(kMaxNodes)) cell *= 1.01;
+  while (double(count(cell)[0]) * count(cell)[1] * count(cell)[2] > budget) cell *= 1.01;
   cell_ = cell;
   nodes_ = count(cell);
   origin_ = box.min;

@@ -49,7 +49,8 @@ TEST(DistanceBound, NeverAboveTheExactDistanceAndCloseNearTheSurface) {
     const double size = (box.max - box.min).norm();
     ASSERT_GT(bound.cell(), 0.0);
     const std::array<int, 3> n = bound.nodes();
-    EXPECT_LE(size_t(n[0]) * n[1] * n[2], DistanceBound::kMaxNodes);
+    EXPECT_LE(size_t(n[0]) * n[1] * n[2], DistanceBound::max_nodes(c.mesh.triangle_count()));
+    EXPECT_GT(size_t(n[0]) * n[1] * n[2], DistanceBound::max_nodes(c.mesh.triangle_count()) / 2);
     EXPECT_EQ(bound.bytes(), size_t(n[0]) * n[1] * n[2] * sizeof(float));
     std::mt19937_64 rng(7);
     std::uniform_real_distribution<double> unit(0.0, 1.0);

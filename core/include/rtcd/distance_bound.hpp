@@ -21,7 +21,7 @@ class Shape;
 class DistanceBound {
  public:
   // Meshes: a grid of nodes over the mesh's box grown by kPadding times half its
-  // diagonal, at most kMaxNodes of them; each node holds the exact distance
+  // diagonal, at most max_nodes(triangles) of them; each node holds the exact distance
   // to the nearest triangle (computed in double within two cells of the
   // surface, beyond that a distance transform's lower bound), rounded down
   // to float. Volumes: closed form, no grid.
@@ -42,7 +42,14 @@ class DistanceBound {
   size_t bytes() const { return values_.size() * sizeof(float); }
 
   static constexpr double kPadding = 0.5;
-  static constexpr size_t kMaxNodes = size_t(1) << 18;
+  // Nodes a mesh's grid may take: kNodesPerTriangle a triangle, between
+  // kMinNodes and kMaxNodes (a coarse box needs no megabyte).
+  static constexpr size_t kMinNodes = size_t(1) << 12, kMaxNodes = size_t(1) << 18, kNodesPerTriangle = 300;
+  static size_t max_nodes(size_t triangles) {
+    return triangles * kNodesPerTriangle < kMinNodes   ? kMinNodes
+           : triangles * kNodesPerTriangle > kMaxNodes ? kMaxNodes
+                                                       : triangles * kNodesPerTriangle;
+  }
 
  private:
   enum class Kind { grid, sphere, box, half_space } kind_ = Kind::grid;
