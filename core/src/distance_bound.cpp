@@ -151,25 +151,6 @@ DistanceBound::DistanceBound(const Shape& shape) {
   }
 }
 
-bool DistanceBound::beyond(const Eigen::Vector3d& p, double r) const {
-  if (kind_ != Kind::grid) return lower(p) > r;
-  const Eigen::Vector3d g = (p - origin_) / cell_;
-  std::array<int, 3> c;
-  for (int a = 0; a < 3; ++a) {
-    if (!(g[a] >= 0.0 && g[a] <= nodes_[a] - 1)) return box_distance(bounds_, p) - 1e-9 * cell_ > r;
-    c[a] = std::min(int(g[a]), nodes_[a] - 2);
-  }
-  // value - |p - node| > r, as (value - r)^2 > |p - node|^2 with value > r;
-  // the margin stands for lower()'s rounding term.
-  const double need = r + 1e-9 * cell_;
-  for (int k = 0; k < 8; ++k) {
-    const int x = c[0] + (k & 1), y = c[1] + ((k >> 1) & 1), z = c[2] + ((k >> 2) & 1);
-    const double room = double(at(x, y, z)) - need;
-    if (room > 0.0 && room * room > (p - (origin_ + cell_ * Eigen::Vector3d(x, y, z))).squaredNorm()) return true;
-  }
-  return box_distance(bounds_, p) - 1e-9 * cell_ > r;
-}
-
 double DistanceBound::lower(const Eigen::Vector3d& p) const {
   switch (kind_) {
     case Kind::sphere: return std::abs(p.norm() - radius_);

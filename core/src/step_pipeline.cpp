@@ -634,14 +634,13 @@ void PipelineNarrowPhase::certify(BodyPair p, PairWork& w, const PairResult& pr)
   PairState& state = *w.state;
   state.promoted = false;
   if (w.batch == kCertified || pr.contact_count + pr.predictive_count > 0) return;
-  const double radius = std::max(shapes_[bodies_[p.a].shape].shape->radius(), shapes_[bodies_[p.b].shape].shape->radius());
+  const double ra = shapes_[bodies_[p.a].shape].shape->radius(), rb = shapes_[bodies_[p.b].shape].shape->radius();
   if (w.batch == kWalked && state.retry_after >= 0.0 &&
-      max_displacement(state.relative_at_attempt, w.relative, radius) < state.retry_after)
+      max_displacement(state.relative_at_attempt, w.relative, std::max(ra, rb)) < state.retry_after)
     return;
   const double need = w.limits.distance_extension + certificate_slack(p, w.relative);
   // How far a proof reaches: as far again as the extension, or a quarter of
   // the smaller body; features farther from the other's box are not looked at.
-  const double ra = shapes_[bodies_[p.a].shape].shape->radius(), rb = shapes_[bodies_[p.b].shape].shape->radius();
   const double small = ra == 0.0 ? rb : rb == 0.0 ? ra : std::min(ra, rb);
   const double cap = need + std::max(w.limits.distance_extension, 0.25 * small) + kCertificateSteps * w.step_motion;
   // A certificate the pair's speed would spend within a few steps costs more

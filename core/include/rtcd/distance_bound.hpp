@@ -33,8 +33,6 @@ class DistanceBound {
   // mesh's box. At most the exact distance; on a mesh, at most about a cell's
   // diagonal below it near the surface.
   double lower(const Eigen::Vector3d& p) const;
-  // lower(p) > r, without square roots where it can: one test per walking edge.
-  bool beyond(const Eigen::Vector3d& p, double r) const;
 
   // The grid: nodes per axis (0 for volumes), cell size, bytes held.
   std::array<int, 3> nodes() const { return nodes_; }

@@ -81,7 +81,7 @@ void visit_near_leaves(const RayJob& job, const RaySources& sources, const Dista
     if (!(((centre + half).array() >= box.min.array()).all() && ((centre - half).array() <= box.max.array()).all()))
       return false;
     if (!sources.edges_only(n)) return true;
-    return reach >= 0.0 && !target.beyond(centre, 0.5 * (n.hi - n.lo).cast<double>().norm() + beyond);
+    return reach >= 0.0 && !(target.lower(centre) > 0.5 * (n.hi - n.lo).cast<double>().norm() + beyond);
   };
   sources.visit_leaves(may_hold, visit_node);
 }
