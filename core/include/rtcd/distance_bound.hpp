@@ -1,6 +1,6 @@
 // A lower bound on how far a point lies from a shape's surface, read in
 // O(1): what proves a pair of bodies apart without casting a ray
-// (docs/ARCHITECTURE.md, Pairs certified apart). Unsigned: it says nothing
+// (docs/ARCHITECTURE.md, Distance bounds). Unsigned: it says nothing
 // of inside or outside, so open meshes get one too.
 #pragma once
 
