@@ -21,6 +21,7 @@ struct Sum {
   uint64_t steps = 0, peak_step = 0;
   double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
   size_t pairs = 0, pairs_full = 0, fallbacks = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+  size_t missed_pairs = 0, truth_checked = 0, over_reports = 0;
   size_t certified = 0, granted = 0, expired = 0;
   RayCounts counts;
 
@@ -47,6 +48,9 @@ struct Sum {
     deep += s.deep;
     missed += s.missed;
     false_rays += s.false_rays;
+    missed_pairs += s.missed_pairs;
+    truth_checked += s.truth_checked;
+    over_reports += s.over_reports;
   }
 };
 
@@ -67,7 +71,8 @@ void print_row(const Sum& s, bool ours) {
   if (s.judged == 0) {
     std::printf("– |\n");
   } else {
-    std::printf("%zu: %zu of %zu deep rays missed, %zu false |\n", s.judged, s.missed, s.deep, s.false_rays);
+    std::printf("%zu: %zu of %zu deep rays missed, %zu false; %zu pairs missed; %zu of %zu contacts over the truth |\n",
+                s.judged, s.missed, s.deep, s.false_rays, s.missed_pairs, s.over_reports, s.truth_checked);
   }
 }
 

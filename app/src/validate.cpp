@@ -35,9 +35,11 @@ void print_row(const validation::Summary& s) {
   std::printf("\n");
   if (s.mode == validation::RunMode::iterative)
     std::printf("%-10s missed: %zu of %zu deep origins, %zu not tracked going into the judged step; per colliding "
-                "pair p50 %.2e p90 %.2e p99 %.2e max %.2e; full steps %.2f%% of %zu motion steps\n",
+                "pair p50 %.2e p90 %.2e p99 %.2e max %.2e; full steps %.2f%% of %zu motion steps; judged steps "
+                "walked %zu, skipped on a certificate %zu\n",
                 "", s.missed, s.deep, s.missed_untracked, s.missed_p50, s.missed_p90, s.missed_p99, s.missed_max,
-                s.motion_steps ? 100.0 * double(s.full_steps) / double(s.motion_steps) : 0.0, s.motion_steps);
+                s.motion_steps ? 100.0 * double(s.full_steps) / double(s.motion_steps) : 0.0, s.motion_steps,
+                s.iterative_pairs, s.certified_pairs);
   std::printf("%-10s truth: %zu contacts, %zu deeper than 1.25x their true penetration; solver depth / true "
               "p50 %.3f p99 %.3f max %.3f; push to nearest surface p50 %.1f deg p95 %.1f deg\n",
               "", s.truth_checked, s.over_reports, s.truth_ratio_p50, s.truth_ratio_p99, s.truth_ratio_max,

@@ -160,17 +160,27 @@ struct Verdict {
   std::vector<std::array<bool, 2>> closed;
 };
 
-Verdict judge_exact(const sim::RecordedFrame& frame, const std::vector<size_t>& body_shape,
-                    const std::vector<oracle::ExactShape>& exact, double epsilon_scale) {
+// What the judge needs of the step beside the verdict.
+struct Judge {
+  const sim::RecordedFrame& frame;
+  const std::vector<size_t>& body_shape;
+  const std::vector<oracle::ExactShape>& exact;
+  double epsilon_scale;
+  const oracle::ExactShape& of(BodyId body) const { return exact[body_shape[body]]; }
+  double epsilon(const BodyPair& p) const {
+    return epsilon_scale * std::max(of(p.a).shape().radius(), of(p.b).shape().radius());
+  }
+};
+
+Verdict judge_exact(const Judge& j) {
+  const sim::RecordedFrame& frame = j.frame;
   Verdict v;
   v.deep.resize(frame.pairs.size());
   v.not_outside.resize(frame.pairs.size());
   v.closed.resize(frame.pairs.size());
   tbb::parallel_for(size_t(0), frame.pairs.size(), [&](size_t i) {
     const BodyPair& p = frame.pairs[i];
-    const oracle::ExactShape& ea = exact[body_shape[p.a]];
-    const oracle::ExactShape& eb = exact[body_shape[p.b]];
-    const double epsilon = epsilon_scale * std::max(ea.shape().radius(), eb.shape().radius());
+    const double epsilon = j.epsilon(p);
     const auto one_side = [&](const oracle::ExactShape& source, const Pose& source_pose, const oracle::ExactShape& target,
                               const Pose& target_pose, int side) {
       v.closed[i][side] = target.closed();
@@ -181,15 +191,34 @@ Verdict judge_exact(const sim::RecordedFrame& frame, const std::vector<size_t>& 
         if (!rays[k].far_outside()) v.not_outside[i][side].push_back(uint32_t(k));
       }
     };
-    one_side(ea, frame.poses[p.a], eb, frame.poses[p.b], 0);
-    one_side(eb, frame.poses[p.b], ea, frame.poses[p.a], 1);
+    one_side(j.of(p.a), frame.poses[p.a], j.of(p.b), frame.poses[p.b], 0);
+    one_side(j.of(p.b), frame.poses[p.b], j.of(p.a), frame.poses[p.a], 1);
   });
   return v;
 }
 
-void count_judged(const Verdict& v, const StepResult& r, ReplayStep& out) {
+// A pair with no vertex deep in the other body: does an edge of either
+// cross the other deeper than epsilon, or a sphere's cap reach in?
+bool crossing_deep(const Judge& j, const BodyPair& p) {
+  const double epsilon = j.epsilon(p);
+  const Pose &pa = j.frame.poses[p.a], &pb = j.frame.poses[p.b];
+  for (int side = 0; side < 2; ++side) {
+    const oracle::ExactShape& source = side == 0 ? j.of(p.a) : j.of(p.b);
+    const oracle::ExactShape& target = side == 0 ? j.of(p.b) : j.of(p.a);
+    if (!target.closed()) continue;
+    const Pose &source_pose = side == 0 ? pa : pb, &target_pose = side == 0 ? pb : pa;
+    for (double depth : target.edge_depths(source.shape(), source_pose, target_pose))
+      if (depth > epsilon) return true;
+    if (target.sphere_depth(source.shape(), source_pose, target_pose) > epsilon) return true;
+  }
+  return false;
+}
+
+void count_judged(const Judge& j, const Verdict& v, const StepResult& r, ReplayStep& out) {
   std::vector<uint32_t> hit;
+  std::vector<size_t> separate;  // pairs we call separate with no vertex deep in the other body
   for (size_t i = 0; i < r.pairs.size(); ++i) {
+    bool deep_vertex = false;
     for (int side = 0; side < 2; ++side) {
       if (!v.closed[i][side]) continue;
       hit.clear();
@@ -199,10 +228,32 @@ void count_judged(const Verdict& v, const StepResult& r, ReplayStep& out) {
       for (uint32_t vertex : hit) out.false_rays += !std::binary_search(allowed.begin(), allowed.end(), vertex);
       const auto& deep = v.deep[i][side];
       if (deep.empty()) continue;
+      deep_vertex = true;
       std::sort(hit.begin(), hit.end());
       out.deep += deep.size();
       for (uint32_t vertex : deep) out.missed += !std::binary_search(hit.begin(), hit.end(), vertex);
     }
+    if (r.pairs[i].colliding) continue;
+    if (deep_vertex) {
+      ++out.missed_pairs;
+    } else {
+      separate.push_back(i);
+    }
+  }
+  // Crossings no vertex sees, searched only where we found nothing.
+  std::vector<uint8_t> crossed(separate.size(), 0);
+  tbb::parallel_for(size_t(0), separate.size(),
+                    [&](size_t k) { crossed[k] = crossing_deep(j, j.frame.pairs[separate[k]]); });
+  for (uint8_t c : crossed) out.missed_pairs += c;
+  // Every contact against the true penetration at its point.
+  for (const Contact& c : r.contacts) {
+    const oracle::ExactShape& target = j.of(c.target_body);
+    if (!target.closed()) continue;
+    const Pose& pose = j.frame.poses[c.target_body];
+    const double truth = target.penetration(pose.inverse().apply(c.origin));
+    const double smaller = std::min(target.shape().radius(), j.of(c.source_body).shape().radius());
+    ++out.truth_checked;
+    out.over_reports += oracle::over_reports(c.push.norm(), truth, smaller);
   }
   out.judged = true;
 }
@@ -258,8 +309,9 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
       for (auto& r : runners) r->add_body(kinds[id], frame.poses[id]);
     }
     const bool judge = options.judge_every > 0 && step % options.judge_every == 0;
+    const Judge judging{frame, body_shape, exact, options.epsilon_scale};
     std::optional<Verdict> verdict;
-    if (judge) verdict = judge_exact(frame, body_shape, exact, options.epsilon_scale);
+    if (judge) verdict = judge_exact(judging);
     for (size_t i = 0; i < runners.size(); ++i) {
       if (step % configs[i].every != 0 || runs[i].stopped()) continue;
       if (configs[i].budget_seconds > 0 && spent[i] > configs[i].budget_seconds) {
@@ -271,7 +323,7 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
       out.pairs = frame.pairs.size();
       runners[i]->run(frame, out);
       spent[i] += out.seconds;
-      if (verdict && runners[i]->result()) count_judged(*verdict, *runners[i]->result(), out);
+      if (verdict && runners[i]->result()) count_judged(judging, *verdict, *runners[i]->result(), out);
     }
     if (options.progress) options.progress(step + 1, total);
   }

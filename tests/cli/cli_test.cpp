@@ -276,6 +276,14 @@ TEST_F(CliFiles, BenchRunsTheSmallStreamAndReplaysItsRecording) {
   ASSERT_NE(all, std::string::npos) << full.out;
   EXPECT_NE(full.out.find("| 100.0% | 0.0% |", all), std::string::npos) << full.out;
   EXPECT_NE(full.out.find("| 6: ", all), std::string::npos) << full.out;
+  // Judged whole: no interpenetrating pair called separate, no contact over
+  // its true penetration, and contacts were judged.
+  const size_t verdict = full.out.find(" pairs missed; ", all);
+  ASSERT_NE(verdict, std::string::npos) << full.out;
+  EXPECT_EQ(full.out.compare(verdict - 3, 3, "; 0"), 0) << full.out;
+  const std::string over = full.out.substr(verdict + 15, full.out.find(" contacts over", verdict) - verdict - 15);
+  EXPECT_EQ(over.rfind("0 of ", 0), 0u) << full.out;
+  EXPECT_NE(over, "0 of 0") << full.out;
   // The step's counters per phase: full mode traces, never walks.
   EXPECT_NE(full.out.find("| rays_iterative | 0 |"), std::string::npos) << full.out;
   EXPECT_EQ(full.out.find("| rays_full | 0 |"), std::string::npos) << full.out;

@@ -36,16 +36,17 @@ struct Judged {
 Judged judge(const StepResult& r, const std::shared_ptr<const Shape>& a, const Pose& pose_a,
              const std::shared_ptr<const Shape>& b, const Pose& pose_b) {
   const oracle::ExactShape exact_a(a), exact_b(b);
-  const double allowance = 1e-3 * std::min(a->radius(), b->radius()), tiny = 1e-9;
+  const double smaller_radius = std::min(a->radius(), b->radius()), tiny = 1e-9;
   Judged j;
   for (const Contact& c : r.contacts) {
     const bool into_b = c.source == Side::a;
     const oracle::ExactShape& target = into_b ? exact_b : exact_a;
     const Pose& pose = into_b ? pose_b : pose_a;
     const Eigen::Vector3d p = pose.inverse().apply(c.origin);
-    const double truth = target.inside(p) ? target.distance(p) : 0.0;
+    const double truth = target.penetration(p);
     ++j.contacts;
-    const bool over = c.depth > 1.25 * truth + allowance || c.push.norm() > 1.25 * truth + allowance;
+    const bool over = oracle::over_reports(c.depth, truth, smaller_radius) ||
+                      oracle::over_reports(c.push.norm(), truth, smaller_radius);
     j.over_reports += over;
     EXPECT_FALSE(over) << "contact " << to_string(c.kind) << " of vertex " << c.vertex << ": depth " << c.depth
                        << ", push " << c.push.norm() << ", true penetration " << truth;

@@ -26,9 +26,12 @@ size_t env_number(const char* name, size_t fallback) {
 struct Case {
   std::string family, backend;
   RunMode mode;
+  bool certify = false;  // pairs certified apart (trace_separated_pairs off)
 };
 
-void PrintTo(const Case& c, std::ostream* os) { *os << c.family << '/' << c.backend << '/' << to_string(c.mode); }
+void PrintTo(const Case& c, std::ostream* os) {
+  *os << c.family << '/' << c.backend << '/' << to_string(c.mode) << (c.certify ? "/certified" : "");
+}
 
 std::vector<Case> all_cases() {
   std::vector<Case> cases;
@@ -47,6 +50,10 @@ std::vector<Case> all_cases() {
       // (tests/opencl). Concave and torus run on basic: 20-100 s a mode.
       if (backend == "basic" && (family == "highres" || family == "knots")) continue;
       for (RunMode mode : {RunMode::full, RunMode::iterative}) cases.push_back({family, backend, mode});
+      // Walks with certificates granted at the full step and expiring on
+      // the way: where a wrong skip would lose a contact.
+      const bool hard = family == "concave" || family == "bars" || family == "sheets" || family == "tiny";
+      if (backend == "embree" && hard) cases.push_back({family, backend, RunMode::iterative, true});
     }
   }
   return cases;
@@ -81,6 +88,7 @@ TEST_P(Differential, BoundsHold) {
   o.mode = c.mode;
   o.pairs = 1000 * env_number("RTCD_DIFFERENTIAL_INTENSITY", 1);
   o.seed = env_number("RTCD_DIFFERENTIAL_SEED", 1);
+  o.config.trace_separated_pairs = !c.certify;
   // Iterative runs use the default configuration: the bounds below are what
   // a host gets without tuning.
   // The reference libraries judge the poses, not our backend: once per
@@ -124,7 +132,13 @@ TEST_P(Differential, BoundsHold) {
     // The derived threshold may send a pair on a thin body back to full
     // tracing before the judged step (the price, reported as the full-step
     // rate); most judged steps still walk, so the bounds below judge walks.
-    EXPECT_GE(s.iterative_pairs, s.pairs / 2) << "most judged steps must walk";
+    EXPECT_GE(s.iterative_pairs + s.certified_pairs, s.pairs / 2) << "most judged steps must walk (or skip)";
+    EXPECT_GT(s.iterative_pairs, 0u) << "no judged step walked";
+    if (c.certify) {
+      EXPECT_GT(s.certified_pairs, 0u) << "no judged step was skipped on a certificate";
+    } else {
+      EXPECT_EQ(s.certified_pairs, 0u);
+    }
     EXPECT_LE(s.missed_pair_rate(), 0.005) << s.missed_pairs << " of " << s.colliding << " colliding pairs missed";
     EXPECT_LE(s.missed_rate(), 0.005) << s.missed << " of " << s.deep << " deep origins missed";
     // A walked contact is checked for a fold between its entry and exit
@@ -140,18 +154,23 @@ TEST_P(Differential, BoundsHold) {
     EXPECT_EQ(s.fcl_agree, s.fcl_checked);
     report_first(family, r, o, [](const PairMetrics& m) { return m.colliding_exact && !m.contained && !m.fcl; },
                  "FCL calls separated a pair with a deep vertex");
-    // GIMPACT, on the pairs it ran, sees every one of them too.
+    // GIMPACT, on the pairs it ran, sees every one of them too; bodies 1e-9
+    // across are below its fixed tolerances, and it calls them all separate
+    // (the summary reports it).
     EXPECT_GT(s.gimpact_checked, 0u) << "no pair checked against GIMPACT: the agreement would be vacuous";
-    EXPECT_EQ(s.gimpact_agree, s.gimpact_checked);
-    report_first(family, r, o,
-                 [](const PairMetrics& m) { return m.has_gimpact && m.colliding_exact && !m.contained && !m.gimpact; },
-                 "GIMPACT calls separated a pair with a deep vertex");
+    if (c.family != "tiny") {
+      EXPECT_EQ(s.gimpact_agree, s.gimpact_checked);
+      report_first(family, r, o,
+                   [](const PairMetrics& m) { return m.has_gimpact && m.colliding_exact && !m.contained && !m.gimpact; },
+                   "GIMPACT calls separated a pair with a deep vertex");
+    }
   }
 }
 
 INSTANTIATE_TEST_SUITE_P(All, Differential, ::testing::ValuesIn(all_cases()),
                          [](const ::testing::TestParamInfo<Case>& info) {
-                           return info.param.family + "_" + test::test_name(info.param.backend) + "_" + to_string(info.param.mode);
+                           return info.param.family + "_" + test::test_name(info.param.backend) + "_" +
+                                  to_string(info.param.mode) + (info.param.certify ? "_certified" : "");
                          });
 
 }  // namespace

@@ -70,7 +70,7 @@ void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>
 void judge_truth(const StepResult& step, const PairResult& pr, const oracle::ExactShape& exact_a,
                  const oracle::ExactShape& exact_b, const std::vector<oracle::ExactRay>& rays_ab,
                  const std::vector<oracle::ExactRay>& rays_ba, const PosePair& poses, double epsilon,
-                 double allowance, PairMetrics& m) {
+                 double smaller_radius, PairMetrics& m) {
   for (const Contact& c : step.contacts_of(pr)) {
     const bool into_b = c.source == Side::a;
     const oracle::ExactShape& target = into_b ? exact_b : exact_a;
@@ -81,12 +81,12 @@ void judge_truth(const StepResult& step, const PairResult& pr, const oracle::Exa
     if (c.kind == ContactKind::vertex) {
       const oracle::ExactRay& e = (into_b ? rays_ab : rays_ba)[c.vertex];
       truth = e.inside ? e.penetration : 0.0;
-    } else if (target.inside(p)) {
-      truth = target.distance(p);
+    } else {
+      truth = target.penetration(p);
     }
     const double solver = c.push.norm();  // what a host's solver is asked to undo
     ++m.truth_checked;
-    m.over_reports += solver > 1.25 * truth + allowance;
+    m.over_reports += oracle::over_reports(solver, truth, smaller_radius);
     if (!(truth > epsilon) || !(solver > 0.0)) continue;
     const double ratio = solver / truth;
     m.max_truth_ratio = std::max(m.max_truth_ratio, ratio);
@@ -147,8 +147,7 @@ class ShardRun {
         options(options),
         config(run_config(options)),
         epsilon(epsilon_of(family, options)),
-        // Over-reports: deeper than 1.25x the truth plus 1e-3 of the smaller body's radius.
-        allowance(1e-3 * std::min(family.a->radius(), family.b->radius())),
+        smaller_radius(std::min(family.a->radius(), family.b->radius())),
         first(first),
         count(count) {}
 
@@ -176,7 +175,7 @@ class ShardRun {
   const Family& family;
   const RunOptions& options;
   const Config config;
-  const double epsilon, allowance;
+  const double epsilon, smaller_radius;
   const size_t first, count;
   Shard shard;
   std::vector<PosePair> judged;  // by pair of the shard
@@ -245,7 +244,8 @@ PairMetrics ShardRun::judge_pair(size_t k, const References& references) {
   m.poses = judged[k];
   const PairResult& pr = step.pairs[k];
   m.iterative = pr.mode == PairMode::iterative;
-  m.full_steps = full_steps[k] + (options.mode == RunMode::iterative && !m.iterative);
+  m.certified = pr.mode == PairMode::certified;
+  m.full_steps = full_steps[k] + (options.mode == RunMode::iterative && pr.mode == PairMode::full);
   m.colliding_ours = pr.colliding;
   mark_our_rays(k, m);
 
@@ -255,7 +255,7 @@ PairMetrics ShardRun::judge_pair(size_t k, const References& references) {
   m.seconds_exact += seconds_since(t);
   judge(rays_ab, ours_a, exact_b.closed(), config.nearest_surface, epsilon, m);
   judge(rays_ba, ours_b, exact_a.closed(), config.nearest_surface, epsilon, m);
-  judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, allowance, m);
+  judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, smaller_radius, m);
   count_crossings(references, m);
   m.colliding_exact = m.deep > 0 || m.crossing_deep > 0;
   if (options.with_oracles) run_oracles(references, m);
@@ -353,6 +353,7 @@ void SummaryFold::add(const Shard& shard) {
 
 void SummaryFold::add(const PairMetrics& m) {
   s.iterative_pairs += m.iterative;
+  s.certified_pairs += m.certified;
   s.full_steps += m.full_steps;
   s.deep += m.deep;
   s.missed += m.missed;
@@ -428,6 +429,7 @@ template <class Metrics, class Visit>
 void visit_fields(Metrics& m, Visit&& visit) {
   visit("index", m.index);
   visit("iterative", m.iterative);
+  visit("certified", m.certified);
   visit("full_steps", m.full_steps);
   visit("deep", m.deep);
   visit("missed", m.missed);
@@ -558,6 +560,7 @@ nlohmann::json to_json(const Summary& s) {
           {"seed", s.seed},
           {"epsilon", s.epsilon},
           {"iterative_pairs", s.iterative_pairs},
+          {"certified_pairs", s.certified_pairs},
           {"motion_steps", s.motion_steps},
           {"full_step_rate", s.motion_steps ? double(s.full_steps) / double(s.motion_steps) : 0.0},
           {"colliding_fraction", s.colliding_fraction()},

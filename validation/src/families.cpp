@@ -37,8 +37,9 @@ std::shared_ptr<const Shape> mesh(Mesh m) { return std::make_shared<Shape>(std::
 }  // namespace
 
 const std::vector<std::string>& family_names() {
-  static const std::vector<std::string> names = {"convex", "concave", "torus", "plates", "highres", "primitives", "bars", "rings",
-                                                   "knots",  "gears",   "coarse", "boxes", "cacti"};
+  static const std::vector<std::string> names = {"convex", "concave", "torus",  "plates", "highres", "primitives",
+                                                   "bars",   "rings",   "knots",  "gears",  "coarse",  "boxes",
+                                                   "cacti",  "sheets",  "tiny",   "ratio"};
   return names;
 }
 
@@ -127,6 +128,28 @@ Family make_family(const std::string& name) {
     f.b = mesh(gen::concave_blob(902, 17, 1.0));
     f.reach = 1.9;
     f.thinnest = 0.17;
+  } else if (name == "sheets") {
+    // The distance bound's coarse cases: the sheet is thinner than a cell of
+    // either grid, its edges longer than the blob's cells, its rims blades.
+    f.description = "902-triangle concave blob (r 0.6) vs sheet mesh (2 x 2 x 0.002, 12 triangles)";
+    f.a = mesh(gen::concave_blob(902, 18, 0.6));
+    f.b = mesh(gen::box({1.0, 1.0, 0.001}));
+    f.reach = 1.8;
+    f.thinnest = 0.002;
+    f.motion = 1e-4;
+  } else if (name == "tiny") {
+    f.description = "two 902-triangle concave blobs 1e-9 across (r 3e-10 and 5e-10)";
+    f.a = mesh(gen::concave_blob(902, 19, 3e-10));
+    f.b = mesh(gen::concave_blob(902, 20, 5e-10));
+    f.reach = 1.1e-9;
+    f.thinnest = 1e-10;
+  } else if (name == "ratio") {
+    f.description = "902-triangle concave blob (r 1e-4) at the surface of a 902-triangle concave blob (r 1)";
+    f.a = mesh(gen::concave_blob(902, 21, 1e-4));
+    f.b = mesh(gen::concave_blob(902, 22, 1.0));
+    f.at_surface = true;
+    f.thinnest = 1e-4;
+    f.motion = 5e-7;
   } else {
     std::string list;
     for (const auto& n : family_names()) list += (list.empty() ? "" : ", ") + n;
@@ -139,7 +162,7 @@ double Family::iterative_threshold() const {
   return std::min(0.01 * std::max(a->radius(), b->radius()), 0.1 * thinnest);
 }
 
-double Family::step_motion() const { return 0.005 * std::max(a->radius(), b->radius()); }
+double Family::step_motion() const { return motion > 0 ? motion : 0.005 * std::max(a->radius(), b->radius()); }
 
 PosePair random_poses(const Family& family, uint64_t seed, uint64_t index) {
   auto g = generator(seed, index, 0);
@@ -149,7 +172,33 @@ PosePair random_poses(const Family& family, uint64_t seed, uint64_t index) {
   p.a.orientation = random_rotation(g);
   p.b.orientation = random_rotation(g);
   p.a.position = centre;
-  p.b.position = centre + family.reach * unit(g) * unit_vector(g);
+  if (!family.at_surface) {
+    p.b.position = centre + family.reach * unit(g) * unit_vector(g);
+    return p;
+  }
+  const Mesh& m = *family.b->mesh();
+  const auto corners = [&](const Mesh::Triangle& t) {
+    return std::array<Eigen::Vector3d, 3>{m.positions()[t[0]].cast<double>(), m.positions()[t[1]].cast<double>(),
+                                          m.positions()[t[2]].cast<double>()};
+  };
+  double area = 0.0;
+  for (const Mesh::Triangle& t : m.triangles()) {
+    const auto c = corners(t);
+    area += (c[1] - c[0]).cross(c[2] - c[0]).norm();
+  }
+  double pick = unit(g) * area;
+  size_t k = 0;
+  for (; k + 1 < m.triangles().size(); ++k) {
+    const auto c = corners(m.triangles()[k]);
+    pick -= (c[1] - c[0]).cross(c[2] - c[0]).norm();
+    if (pick < 0) break;
+  }
+  const auto c = corners(m.triangles()[k]);
+  const double r1 = std::sqrt(unit(g)), r2 = unit(g);  // uniform over the triangle
+  const Eigen::Vector3d on = (1 - r1) * c[0] + r1 * (1 - r2) * c[1] + r1 * r2 * c[2];
+  const Eigen::Vector3d normal = (c[1] - c[0]).cross(c[2] - c[0]).normalized();
+  const Eigen::Vector3d local = on + (4 * unit(g) - 2) * family.a->radius() * normal;
+  p.b.position = centre - p.b.orientation * local;
   return p;
 }
 

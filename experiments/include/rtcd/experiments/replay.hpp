@@ -62,9 +62,13 @@ struct ReplayStep {
   std::string cpu_fallback;         // ours on OpenCL: why the step ran on the CPU instead; empty: it did not
   // Judged steps (ours): ray origins the exact reference puts deeper than
   // epsilon inside the other body, and of those the ones with no contact;
-  // contacts whose origin it puts farther than epsilon outside (false rays).
+  // contacts whose origin it puts farther than epsilon outside (false rays);
+  // pairs it finds interpenetrating deeper than epsilon (a vertex, an edge
+  // crossing, a sphere's cap) that we call separate; contacts judged against
+  // the true penetration at their point, and those over it
+  // (oracle::over_reports).
   bool judged = false;
-  size_t deep = 0, missed = 0, false_rays = 0;
+  size_t deep = 0, missed = 0, false_rays = 0, missed_pairs = 0, truth_checked = 0, over_reports = 0;
 };
 
 struct ReplayRun {

@@ -49,6 +49,8 @@ class ExactShape {
   // majority deciding (a crossing exactly through an edge spoils at most one).
   bool inside(const Eigen::Vector3d& p) const;
   double distance(const Eigen::Vector3d& p) const;
+  // The true penetration at p: its distance to the surface inside, 0 outside.
+  double penetration(const Eigen::Vector3d& p) const { return inside(p) ? distance(p) : 0.0; }
   // The point of the surface nearest to p: inside, the true penetration's
   // way out (its distance is distance(p)).
   Eigen::Vector3d closest_point(const Eigen::Vector3d& p) const;
@@ -82,5 +84,12 @@ class ExactShape {
   std::shared_ptr<const Shape> shape_;
   std::unique_ptr<Tree> tree_;  // meshes only
 };
+
+// The one judgement of a contact against the true penetration at its point:
+// it over-reports when its solver depth (the push's length) passes 1.25x
+// the truth plus 1e-3 of the smaller body's radius.
+inline bool over_reports(double solver_depth, double truth, double smaller_radius) {
+  return solver_depth > 1.25 * truth + 1e-3 * smaller_radius;
+}
 
 }  // namespace rtcd::oracle

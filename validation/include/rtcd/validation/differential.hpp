@@ -52,6 +52,7 @@ struct PairMetrics {
   uint64_t index = 0;
   PosePair poses;  // where it was judged (after the motions in iterative runs)
   bool iterative = false;  // the judged step walked (iterative runs)
+  bool certified = false;  // ... or was skipped on a certificate (PairMode::certified)
   size_t full_steps = 0;   // iterative runs: of the motion steps, those equation 2.1 sent back to full
   size_t deep = 0;         // origins the exact reference puts inside deeper than epsilon
   size_t missed = 0;       // ... with no penetrating ray
@@ -94,7 +95,7 @@ struct Summary {
   size_t pairs = 0;
   uint64_t seed = 0;
   double epsilon = 0.0;
-  size_t iterative_pairs = 0;
+  size_t iterative_pairs = 0, certified_pairs = 0;  // judged steps that walked, that were skipped on a certificate
   size_t motion_steps = 0, full_steps = 0;  // iterative runs: pair-steps after the first, and those traced in full
   bool with_oracles = false;  // FCL, GIMPACT, libccd ran: their fields mean something
   size_t deep = 0, missed = 0, missed_untracked = 0, far_outside = 0, false_rays = 0, depth_checked = 0;
