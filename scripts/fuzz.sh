@@ -3,7 +3,9 @@
 # each, replays its saved regressions once, then fuzzes for FUZZ_SECONDS
 # (default 60; 0 replays only) on a scratch copy of its seed corpus, so the
 # committed corpus never grows. Exits non-zero when any harness crashes;
-# crashing inputs are kept under build/fuzz/artifacts/<harness>/.
+# crashing inputs are kept under build/fuzz/artifacts/<harness>/, copied
+# to fuzz/regressions/<harness>/ and printed in base64 (the seed alone
+# does not reproduce a finding: the corpus and the build change it).
 #   scripts/fuzz.sh                      # every harness
 #   FUZZ_SECONDS=600 scripts/fuzz.sh mesh_pair
 # A campaign (FUZZ_CAMPAIGN=1): each harness for FUZZ_SECONDS on every core
@@ -52,9 +54,13 @@ for h in "${harnesses[@]}"; do
   # (and without LSan's dynamic-TLS tracking, as scripts/sanitize.sh says why)
   [ "$h" = opencl ] && unwind=(env "ASAN_OPTIONS=${ASAN_OPTIONS:-fast_unwind_on_malloc=0:intercept_tls_get_addr=0}")
 
-  # Regressions: each saved input once (libFuzzer runs file arguments and stops).
+  # Regressions: each saved input once (libFuzzer runs file arguments and
+  # stops). The opencl harness reads mesh_pair's inputs: it replays
+  # mesh_pair's regressions too, so each is judged on OpenCL against basic.
   regressions=(fuzz/regressions/$h/*)
-  if [ -e "${regressions[0]}" ]; then
+  [ "$h" = opencl ] && regressions=(fuzz/regressions/mesh_pair/* fuzz/regressions/opencl/*)
+  mapfile -t regressions < <(for r in "${regressions[@]}"; do [ -e "$r" ] && echo "$r"; done)
+  if [ "${#regressions[@]}" -gt 0 ]; then
     echo "== $h: ${#regressions[@]} regression input(s)"
     if ! "${unwind[@]}" "$bin" -timeout="$timeout" -artifact_prefix="$artifacts/" "${regressions[@]}" >"$scratch/$h.regressions.log" 2>&1; then
       tail -n 40 "$scratch/$h.regressions.log"
@@ -106,7 +112,17 @@ for h in "${harnesses[@]}"; do
       fi
     elif [ $rc -ne 0 ]; then
       tail -n 60 "$scratch/$h.log"
-      result="crashed (rc $rc; input saved under $artifacts/)"
+      # The input, not the seed, reproduces a finding: keep it as a
+      # regression and print it, so a CI log alone carries it.
+      mapfile -t found < <(find "$artifacts" -maxdepth 1 -type f -newer "$scratch/$h.log.start" \
+        \( -name 'crash-*' -o -name 'leak-*' -o -name 'timeout-*' -o -name 'oom-*' -o -name 'slow-unit-*' \))
+      mkdir -p "fuzz/regressions/$h"
+      for f in "${found[@]}"; do
+        cp "$f" "fuzz/regressions/$h/"
+        echo "finding fuzz/regressions/$h/$(basename "$f") ($(stat -c %s "$f") bytes), base64:"
+        head -c 65536 "$f" | base64
+      done
+      result="crashed (rc $rc; ${#found[@]} input(s) saved under fuzz/regressions/$h/)"
     fi
   fi
   [ "$result" = ok ] || failed=1

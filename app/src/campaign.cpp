@@ -7,6 +7,7 @@
 
 #include <cerrno>
 #include <csignal>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
@@ -246,7 +247,11 @@ std::optional<std::vector<validation::Shard>> SpreadShards::run_in_campaign(
   }
   ranks.barrier();
   if (!ranks.reports()) return std::nullopt;
-  if (!campaign->missing(run, count).empty()) {
+  const size_t left = campaign->missing(run, count).size();
+  // What a resume reused: the shards kept from before, and those run now.
+  std::fprintf(stderr, "campaign %s: %zu of %zu shards kept from before, %zu run now\n", run.c_str(),
+               count - missing.size(), count, missing.size() - left);
+  if (left > 0) {
     unfinished_ = true;
     return std::nullopt;
   }

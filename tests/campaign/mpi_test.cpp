@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 #include <gtest/gtest.h>
@@ -67,10 +68,24 @@ TEST_P(Ranks, ResumeACampaignThatLostARank) {
   const fs::path dir = fs::temp_directory_path() / ("rtcd_mpi_campaign_" + std::to_string(::getpid()));
   fs::remove_all(dir);
   const std::string args = kRun + " --mode full --no-oracles --campaign " + dir.string() + " --shard-pairs 3";
-  // Every rank dies after its first shard: the job is lost.
+  // Every rank dies after its first shard: the job is lost, killed (not
+  // failing to start), with the shards finished before the kill kept.
   const Outcome r = run_command("validate " + args, "RTCD_CAMPAIGN_KILL=after:1 " + mpirun(GetParam()));
   EXPECT_NE(r.code, 0) << r.out;
-  EXPECT_EQ(validate_json(args, mpirun(GetParam() % 3 + 1)), validate_json(kRun + " --mode full --no-oracles"));
+  EXPECT_NE(r.out.find("signal 9"), std::string::npos) << "not killed: " << r.out;
+  std::map<fs::path, fs::file_time_type> kept;
+  for (const auto& e : fs::directory_iterator(dir / "runs" / "concave.embree.full"))
+    if (e.path().extension() == ".json") kept[e.path()] = fs::last_write_time(e.path());
+  ASSERT_GE(kept.size(), 1u);
+  ASSERT_LE(kept.size(), size_t(GetParam()));
+  // Resumed on another number of ranks: the kept shards read back, not run
+  // again (untouched, and counted as kept), the rest run, the same report.
+  std::string out;
+  EXPECT_EQ(validate_json(args, mpirun(GetParam() % 3 + 1), &out), validate_json(kRun + " --mode full --no-oracles"));
+  const std::string reused = std::to_string(kept.size()) + " of 8 shards kept from before, " +
+                             std::to_string(8 - kept.size()) + " run now";  // 23 pairs in shards of 3
+  EXPECT_NE(out.find(reused), std::string::npos) << "expected '" << reused << "': " << out;
+  for (const auto& [path, written] : kept) EXPECT_EQ(fs::last_write_time(path), written) << path << " ran again";
   fs::remove_all(dir);
 }
 

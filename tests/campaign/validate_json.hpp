@@ -16,8 +16,11 @@ inline nlohmann::json without_seconds(nlohmann::json runs) {
   return runs;
 }
 
-inline nlohmann::json validate_json(const std::string& args, const std::string& prefix = "") {
+// `output`, when given, receives the whole output (stdout and stderr).
+inline nlohmann::json validate_json(const std::string& args, const std::string& prefix = "",
+                                    std::string* output = nullptr) {
   const Outcome r = run_command("validate " + args + " --json", prefix);
+  if (output) *output = r.out;
   EXPECT_EQ(r.code, 0) << r.out;
   // stdout and stderr share the pipe (mpirun's notes, warnings): the JSON
   // is the array printed whole.
