@@ -41,9 +41,10 @@ void print_row(const validation::Summary& s) {
                 s.motion_steps ? 100.0 * double(s.full_steps) / double(s.motion_steps) : 0.0, s.motion_steps,
                 s.iterative_pairs, s.certified_pairs);
   std::printf("%-10s truth: %zu contacts, %zu deeper than 1.25x their true penetration; solver depth / true "
-              "p50 %.3f p99 %.3f max %.3f; push to nearest surface p50 %.1f deg p95 %.1f deg\n",
+              "p50 %.3f p99 %.3f max %.3f; push to nearest surface p50 %.1f deg p95 %.1f deg; %zu pairs whose "
+              "deepest contact is under 0.8x their deepest point\n",
               "", s.truth_checked, s.over_reports, s.truth_ratio_p50, s.truth_ratio_p99, s.truth_ratio_max,
-              s.push_angle_p50, s.push_angle_p95);
+              s.push_angle_p50, s.push_angle_p95, s.under_reported_pairs);
   if (s.ccd_pairs)
     std::printf("%-10s libccd on %zu convex pairs: our largest projected depth / libccd depth = %.3f on average, "
                 "mean |difference| %.4f; libccd %.1f us per pair\n",
@@ -72,13 +73,14 @@ nlohmann::json run_arguments(const ValidateOptions& o, const std::vector<std::st
           {"knobs", knobs_json(o.knobs.config())}};
 }
 
-// Missed and false pairs, each with what reproduces it.
+// Missed, false and under-reported pairs, each with what reproduces it.
 nlohmann::json failing_pairs(const validation::Family& family, const validation::RunResult& r,
                              const validation::RunOptions& run) {
   nlohmann::json out = nlohmann::json::array();
   for (const auto& m : r.pairs)
-    if (m.missed_pair() || m.false_pair())
-      out.push_back({{"pair", m.index}, {"kind", m.missed_pair() ? "missed" : "false"},
+    if (m.missed_pair() || m.false_pair() || m.under_reported)
+      out.push_back({{"pair", m.index},
+                     {"kind", m.missed_pair() ? "missed" : m.false_pair() ? "false" : "under-reported"},
                      {"replay", validation::describe(family, m, run)}});
   return out;
 }

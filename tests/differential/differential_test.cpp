@@ -126,6 +126,10 @@ TEST_P(Differential, BoundsHold) {
     EXPECT_EQ(s.over_reports, 0u) << "of " << s.truth_checked << " contacts; solver depth / true max "
                                   << s.truth_ratio_max;
     report_first(family, r, o, [](const PairMetrics& m) { return m.over_reports > 0; }, "over-reported depth");
+    // ... and from below: each pair's deepest contact reaches 0.8x the
+    // deepest point of its overlap (less 1e-3 of the smaller body).
+    EXPECT_EQ(s.under_reported_pairs, 0u) << "of " << s.colliding << " colliding pairs";
+    report_first(family, r, o, [](const PairMetrics& m) { return m.under_reported; }, "under-reported pair");
     EXPECT_LE(s.push_angle_p50, 15.0);
     EXPECT_LE(s.push_angle_p95, 45.0);
   } else {

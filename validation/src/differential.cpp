@@ -49,6 +49,7 @@ void judge(const std::vector<oracle::ExactRay>& exact, const std::vector<OurRay>
     }
     if (!target_closed) continue;  // no inside/outside claims on an open target
     inside += e.inside;
+    if (e.inside) m.deepest_exact = std::max(m.deepest_exact, e.penetration);
     if (e.deep()) {
       ++m.deep;
       m.missed += !penetrating;
@@ -258,6 +259,7 @@ PairMetrics ShardRun::judge_pair(size_t k, const References& references) {
   judge_truth(step, pr, exact_a, exact_b, rays_ab, rays_ba, m.poses, epsilon, smaller_radius, m);
   count_crossings(references, m);
   m.colliding_exact = m.deep > 0 || m.crossing_deep > 0;
+  m.under_reported = m.deepest_exact > epsilon && m.deepest_ours < 0.8 * m.deepest_exact - 1e-3 * smaller_radius;
   if (options.with_oracles) run_oracles(references, m);
   return m;
 }
@@ -271,6 +273,7 @@ void ShardRun::mark_our_rays(size_t k, PairMetrics& m) {
     // Edge contacts are judged by pair (crossing_deep), vertex rays one by one.
     if (c.kind == ContactKind::vertex) (c.source == Side::a ? ours_a : ours_b)[c.vertex].depth = c.depth;
     m.our_projected_depth = std::max(m.our_projected_depth, c.projected_depth);
+    m.deepest_ours = std::max(m.deepest_ours, c.depth);
   }
 }
 
@@ -282,11 +285,13 @@ void ShardRun::count_crossings(const References& references, PairMetrics& m) {
     for (double depth : depths) {
       m.crossing_deep += depth > epsilon;
       m.crossing_any += depth > 0.0;
+      m.deepest_exact = std::max(m.deepest_exact, depth);
     }
   for (double depth : {references.exact_b.sphere_depth(*family.a, m.poses.a, m.poses.b),
                        references.exact_a.sphere_depth(*family.b, m.poses.b, m.poses.a)}) {
     m.crossing_deep += depth > epsilon;
     m.crossing_any += depth > 0.0;
+    m.deepest_exact = std::max(m.deepest_exact, depth);
   }
   m.seconds_exact += seconds_since(t);
 }
@@ -354,6 +359,7 @@ void SummaryFold::add(const Shard& shard) {
 void SummaryFold::add(const PairMetrics& m) {
   s.iterative_pairs += m.iterative;
   s.certified_pairs += m.certified;
+  s.under_reported_pairs += m.under_reported;
   s.full_steps += m.full_steps;
   s.deep += m.deep;
   s.missed += m.missed;
@@ -430,6 +436,9 @@ void visit_fields(Metrics& m, Visit&& visit) {
   visit("index", m.index);
   visit("iterative", m.iterative);
   visit("certified", m.certified);
+  visit("deepest_exact", m.deepest_exact);
+  visit("deepest_ours", m.deepest_ours);
+  visit("under_reported", m.under_reported);
   visit("full_steps", m.full_steps);
   visit("deep", m.deep);
   visit("missed", m.missed);
@@ -575,6 +584,7 @@ nlohmann::json to_json(const Summary& s) {
           {"depth_error", {{"max", s.max_depth_error}, {"mean", s.mean_depth_error}, {"max_relative", s.max_relative_depth_error}}},
           {"truth", {{"contacts", s.truth_checked},
                      {"over_reports", s.over_reports},
+                     {"under_reported_pairs", s.under_reported_pairs},
                      {"depth_ratio", {{"p50", s.truth_ratio_p50}, {"p99", s.truth_ratio_p99}, {"max", s.truth_ratio_max}}},
                      {"push_angle_degrees", {{"p50", s.push_angle_p50}, {"p95", s.push_angle_p95}}}}},
           {"oracles", s.with_oracles},
@@ -643,7 +653,8 @@ std::string describe(const Family& family, const PairMetrics& m, const RunOption
   s << "family " << family.name << ", seed " << o.seed << ", pair " << m.index << " (" << to_string(o.mode)
     << "): deep " << m.deep << ", missed " << m.missed << ", false rays " << m.false_rays << ", max depth error "
     << m.max_depth_error << ", over-reported contacts " << m.over_reports << " of " << m.truth_checked
-    << ", deepest over the truth " << m.max_truth_ratio << "x" << "\n  pose A: \"" << pose_text(m.poses.a) << "\"\n  pose B: \"" << pose_text(m.poses.b)
+    << ", deepest over the truth " << m.max_truth_ratio << "x, deepest contact " << m.deepest_ours
+    << " against the overlap's deepest point " << m.deepest_exact << "\n  pose A: \"" << pose_text(m.poses.a) << "\"\n  pose B: \"" << pose_text(m.poses.b)
     << "\"\n  replay: rtcd query family:" << family.name << ":a family:" << family.name << ":b --backend "
     << o.backend << " --mode full --pose-a \"" << pose_text(m.poses.a) << "\" --pose-b \"" << pose_text(m.poses.b)
     << "\"\n  or:     rtcd validate --family " << family.name << " --backend " << o.backend << " --mode "

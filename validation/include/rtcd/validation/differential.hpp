@@ -74,6 +74,12 @@ struct PairMetrics {
   // allows (Summary::over_reports), and the largest solver depth over it.
   size_t truth_checked = 0, over_reports = 0;
   double max_truth_ratio = 0.0;
+  // Truth from below: the deepest point of the overlap the exact reference
+  // finds (an origin's distance to the surface, an edge piece's middle, a
+  // sphere's cap) and our deepest contact; under-reported when that is
+  // under 0.8x the exact one less 1e-3 of the smaller body's radius.
+  double deepest_exact = 0.0, deepest_ours = 0.0;
+  bool under_reported = false;
   // What the pair adds to the run's means and percentiles, kept with it so
   // that a run cut into shards folds to the same summary (summarize()):
   // the summed depth errors, each contact's solver depth over the truth and
@@ -123,6 +129,7 @@ struct Summary {
   // deeper than epsilon; contacts deeper than 1.25x the truth + 1e-3 of the smaller body's radius; the
   // angle between the push and the way to the nearest surface point.
   size_t truth_checked = 0, over_reports = 0;
+  size_t under_reported_pairs = 0;  // PairMetrics::under_reported
   double truth_ratio_p50 = 0.0, truth_ratio_p99 = 0.0, truth_ratio_max = 0.0;
   double push_angle_p50 = 0.0, push_angle_p95 = 0.0;  // degrees
   size_t ccd_pairs = 0;
