@@ -212,7 +212,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     return std::min(p.a, p.b);
   }
   struct PairState {
-    Pose relative_at_full;               // lower id's frame in the higher id's frame
+    Pose relative_at_full;               // lower id's frame in the higher id's (a half-space's: the other way)
     std::vector<RayOutcome> tracked[2];  // last kept outcomes, by direction
     Residence residence[2];              // where the executor keeps them, by direction
     // Watched edges at rest while the pair's vertex rays report contacts
@@ -250,7 +250,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     bool hold_edges;  // walking pairs: their watched edges are not tested (Config::edge_retest_motion)
     Batch batch;
     uint32_t first;
-    Pose relative;  // lower id's frame in the higher id's, this step
+    Pose relative;  // as PairState::relative_at_full, this step
     bool expired;   // its certificate expired this step
     bool granted;   // certified this step
     double step_motion;  // equation 2.1 since the last step, when limits are derived (else 0)
@@ -434,12 +434,18 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
 void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
   const BodyId lo = std::min(p.a, p.b), hi = std::max(p.a, p.b);
   const Body &low = bodies_[lo], &high = bodies_[hi];
-  const Pose relative = high.pose.inverse() * low.pose;
+  // Equation 2.1 bounds the motion of the points of the body the relative
+  // pose maps, which must lie within `radius` of its origin: a half-space
+  // (radius 0, no extent) is never the one mapped, or a turn about its
+  // origin far away would read as a turn in place.
+  const bool map_low = shapes_[low.shape].shape->radius() > 0.0;
+  const auto relative_of = [&](const Pose& l, const Pose& h) { return map_low ? h.inverse() * l : l.inverse() * h; };
+  const Pose relative = relative_of(low.pose, high.pose);
   const double radius = std::max(shapes_[low.shape].shape->radius(), shapes_[high.shape].shape->radius());
   if (derive_) {
     double motion = 0.0;
     if (low.seen > 0 && low.seen + 1 == step_ && high.seen > 0 && high.seen + 1 == step_)
-      motion = max_displacement(high.previous.inverse() * low.previous, relative, radius);
+      motion = max_displacement(relative_of(low.previous, high.previous), relative, radius);
     w.limits = derive_limits(config_, shapes_[low.shape].scale, shapes_[high.shape].scale, motion);
     w.step_motion = motion;
   } else {

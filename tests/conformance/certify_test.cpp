@@ -56,6 +56,29 @@ TEST_P(Certified, SkippedWithinTheMarginAndTracedTheStepItPassesIt) {
   EXPECT_EQ(deep.contacts.size(), expected.contacts.size());
 }
 
+// Equation 2.1 bounds the motion of the points of the body it maps, which
+// must lie within the radius of its origin: a half-space's do not. A box
+// 10 m from the ground's origin, turned about it by 0.02 rad, drops 20 cm
+// onto the ground, while the ground's pose seen from the box moves only by
+// that turn (0.02 times the box's radius): measured that way, the
+// certificate would hold and the contact be lost.
+TEST_P(Certified, AGroundPairsMotionIsMeasuredOnTheBoundedBody) {
+  const auto box = shape(gen::box({0.3, 0.3, 0.3}));
+  PairRig rig(GetParam(), std::make_shared<Shape>(HalfSpace{}), box, certifying());
+  const Pose above = at(10.0, 0.0, 0.45);  // 15 cm above the ground
+  const StepResult first = rig.step(Pose{}, above);
+  EXPECT_FALSE(first.pairs[0].colliding);
+  EXPECT_EQ(first.stats.certificates_granted, 1u);
+  Pose turned;
+  turned.orientation = Eigen::Quaterniond(Eigen::AngleAxisd(0.02, Eigen::Vector3d::UnitY()));
+  const Pose dropped = turned * above;  // 10 sin(0.02) = 20 cm lower
+  ASSERT_LT(dropped.position.z(), 0.26);
+  const StepResult r = rig.step(Pose{}, dropped);
+  EXPECT_EQ(r.stats.certificates_expired, 1u);
+  EXPECT_EQ(r.pairs[0].mode, PairMode::full);
+  EXPECT_TRUE(r.pairs[0].colliding) << "the box sank 5 cm into the ground while certified";
+}
+
 // A body wholly inside another touches no surface but is deep: its vertex
 // rays report it, so it is never certified.
 TEST_P(Certified, ABodyWhollyInsideIsNeverCertified) {
