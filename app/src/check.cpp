@@ -2,13 +2,19 @@
 #include "rtcd/app/check.hpp"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <optional>
 #include <iostream>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
 
+#include "rtcd/clock.hpp"
+#include "rtcd/distance_bound.hpp"
 #include "rtcd/error.hpp"
 #include "rtcd/mesh_check.hpp"
+#include "rtcd/shape.hpp"
 
 namespace rtcd::app {
 namespace {
@@ -36,7 +42,26 @@ std::string example_text(const MeshFinding& f) {
   return s.str();
 }
 
-void print_text(const std::string& file, const MeshCheck& c) {
+// What the shape's distance bound takes (a fit mesh only: the others make
+// no shape).
+struct BoundFigures {
+  std::array<int, 3> nodes{};
+  double cell = 0.0, seconds = 0.0;
+  size_t bytes = 0;
+};
+std::optional<BoundFigures> bound_figures(const MeshCheck& c, const MeshData& data) {
+  if (!c.fit()) return std::nullopt;
+  try {
+    const Shape shape(Mesh(data.positions, data.triangles));
+    const auto t = Clock::now();
+    const DistanceBound& bound = shape.distance_bound();
+    return BoundFigures{bound.nodes(), bound.cell(), seconds_since(t), bound.bytes()};
+  } catch (const Error&) {
+    return std::nullopt;  // fit for the method, outside what a shape takes (its size)
+  }
+}
+
+void print_text(const std::string& file, const MeshCheck& c, const std::optional<BoundFigures>& bound) {
   size_t defects = 0;
   for (const auto& f : c.findings) defects += f.defect && f.count > 0;
   std::cout << file << ": " << (c.fit() ? "fit for the method" : "NOT fit for the method") << " (" << defects
@@ -53,6 +78,11 @@ void print_text(const std::string& file, const MeshCheck& c) {
     if (!f.examples.empty() && !f.examples[0].empty()) std::cout << " (" << example_text(f) << ")";
     std::cout << "\n         " << f.meaning << '\n';
   }
+  if (bound)
+    std::cout << "  distance bound: " << bound->nodes[0] << " x " << bound->nodes[1] << " x " << bound->nodes[2]
+              << " nodes, cell " << bound->cell << ", " << bound->bytes << " bytes, built in "
+              << std::round(1e4 * bound->seconds) / 10
+              << " ms\n";
 }
 
 }  // namespace
@@ -84,12 +114,16 @@ int run_check(const CheckOptions& o) {
       if (o.weld) weld_coincident(data.positions, data.triangles);
       const MeshCheck c = check_mesh(data.positions, data.triangles);
       code = std::max(code, c.fit() ? kFit : kDefect);
+      const std::optional<BoundFigures> bound = bound_figures(c, data);
       if (o.json) {
         nlohmann::json j = to_json(c);
         j["file"] = file;
+        if (bound)
+          j["distance_bound"] = {
+              {"nodes", bound->nodes}, {"cell", bound->cell}, {"bytes", bound->bytes}, {"seconds", bound->seconds}};
         all.push_back(j);
       } else {
-        print_text(file, c);
+        print_text(file, c, bound);
       }
     } catch (const MeshError& e) {
       code = kUnreadable;

@@ -14,6 +14,7 @@
 
 #include "command.hpp"
 #include "rtcd/config.hpp"
+#include "rtcd/distance_bound.hpp"
 
 namespace {
 
@@ -183,6 +184,17 @@ TEST(CliCheck, ExitCodesFitDefectUnreadable) {
   const Outcome fit = run("check " + data + "blob_902.obj");
   EXPECT_EQ(fit.code, 0) << fit.out;
   EXPECT_NE(fit.out.find("fit for the method"), std::string::npos) << fit.out;
+  // A fit mesh's distance bound: its grid, what it holds, what it took.
+  EXPECT_NE(fit.out.find("  distance bound: "), std::string::npos) << fit.out;
+  const auto j = nlohmann::json::parse(run("check --json " + data + "blob_902.obj").out);
+  ASSERT_TRUE(j[0].contains("distance_bound")) << j.dump();
+  const auto& bound = j[0]["distance_bound"];
+  size_t nodes = 1;
+  for (int n : bound["nodes"]) nodes *= size_t(n);
+  EXPECT_GE(nodes, rtcd::DistanceBound::kMinNodes);
+  EXPECT_LE(nodes, rtcd::DistanceBound::kMaxNodes);
+  EXPECT_EQ(bound["bytes"].get<size_t>(), nodes * sizeof(float));
+  EXPECT_GT(bound["cell"].get<double>(), 0.0);
   const Outcome crossing = run("check " + defects + "two_cubes_overlapping.off");
   EXPECT_EQ(crossing.code, 1) << crossing.out;
   EXPECT_NE(crossing.out.find("self_intersections: 6 triangle pairs"), std::string::npos) << crossing.out;

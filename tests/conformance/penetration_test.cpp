@@ -106,6 +106,12 @@ TEST_P(Penetration, KnotTubePressedIntoBlob) {
     Judged j = judge(r, knot, pose_knot, blob, pose_blob);
     EXPECT_EQ(j.over_reports, 0u) << "of " << j.contacts;
     EXPECT_LE(j.median_angle(), 15.0);
+    // From below: the deepest contact reaches the sunk tip's true depth.
+    const double tip_depth = oracle::ExactShape(blob).penetration(pose_blob.inverse().apply(pose_knot.apply(tip)));
+    ASSERT_GT(tip_depth, 0.5 * sunk);
+    double deepest = 0.0;
+    for (const Contact& c : r.contacts) deepest = std::max(deepest, c.depth);
+    EXPECT_GE(deepest, 0.8 * tip_depth - 1e-3 * knot->radius()) << "the tip is " << tip_depth << " deep";
   }
 }
 

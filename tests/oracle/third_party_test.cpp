@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include "rtcd/mesh_gen.hpp"
+#include "rtcd/oracle/exact.hpp"
 #include "rtcd/oracle/third_party.hpp"
 #include "support.hpp"
 
@@ -200,6 +201,19 @@ TEST(ThirdParty, ContainmentIsMissedBySurfaceTests) {
   EXPECT_TRUE(c.colliding);
   EXPECT_GT(c.depth, 0.8);  // B has to leave the hull entirely
   EXPECT_LT(c.depth, 1.3);
+
+  // Where FCL and the exact reference part: every vertex of the cube is
+  // deep inside the ball, and rtcd, judged by the exact reference, reports
+  // the pair colliding.
+  const auto ball_shape = std::make_shared<Shape>(gen::icosphere(1.0, 2));
+  const auto cube_shape = std::make_shared<Shape>(gen::box({0.1, 0.1, 0.1}));
+  const auto rays = rtcd::oracle::ExactShape(ball_shape).rays_from(*cube_shape, b, a, 1e-5);
+  ASSERT_FALSE(rays.empty());
+  for (const auto& ray : rays) EXPECT_TRUE(ray.deep());
+  for (const std::string& backend : rtcd::test::usable_backends()) {
+    rtcd::test::PairRig rig(backend, ball_shape, cube_shape);
+    EXPECT_TRUE(rig.step(a, b).pairs[0].colliding) << backend;
+  }
 }
 
 // Normal conventions over random shallow pairs of every kind: from B

@@ -291,7 +291,6 @@ void ShardRun::count_crossings(const References& references, PairMetrics& m) {
                        references.exact_a.sphere_depth(*family.b, m.poses.b, m.poses.a)}) {
     m.crossing_deep += depth > epsilon;
     m.crossing_any += depth > 0.0;
-    m.deepest_exact = std::max(m.deepest_exact, depth);
   }
   m.seconds_exact += seconds_since(t);
 }

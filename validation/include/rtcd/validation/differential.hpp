@@ -1,7 +1,8 @@
 // Differential validation: run a backend over many random pairs of a family
-// and judge every ray against the exact reference, and every pair against
-// FCL, GIMPACT and (convex families) libccd. Per-pair metrics, family
-// aggregates and the time per pair of each.
+// and judge every ray and every pair against the exact reference; FCL,
+// GIMPACT and (convex families) libccd run on the same pairs and judge the
+// exact reference (their agreement with it), not the backend. Per-pair
+// metrics, family aggregates and the time per pair of each.
 #pragma once
 
 #include <cstdint>
@@ -75,9 +76,11 @@ struct PairMetrics {
   size_t truth_checked = 0, over_reports = 0;
   double max_truth_ratio = 0.0;
   // Truth from below: the deepest point of the overlap the exact reference
-  // finds (an origin's distance to the surface, an edge piece's middle, a
-  // sphere's cap) and our deepest contact; under-reported when that is
-  // under 0.8x the exact one less 1e-3 of the smaller body's radius.
+  // finds (an origin's distance to the surface, the deepest middle of an
+  // edge's pieces inside; a sphere's cap depth is how far it reaches in, no
+  // point's depth, and is left out) and our deepest contact; under-reported
+  // when that is under 0.8x the exact one less 1e-3 of the smaller body's
+  // radius.
   double deepest_exact = 0.0, deepest_ours = 0.0;
   bool under_reported = false;
   // What the pair adds to the run's means and percentiles, kept with it so
