@@ -34,7 +34,7 @@ RESULTS = os.path.join("docs", "results")
 # The folders, in the order docs/results/README.md lists them.
 FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "piles", "opencl", "gpu", "threshold-sweep",
            "accuracy-sweep",
-           "edges", "python", "campaign"]
+           "edges", "python", "campaign", "judged"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
 
@@ -474,9 +474,31 @@ def campaign_rows():
                 f"{rate['1']:.0f} / {rate['2']:.0f} ({rate['2'] / rate['1']:.2f}×; {same})", "campaign", source, [m])]
 
 
+def judged_rows():
+    """The judged replays' verdict over every step, from each replay's "all" row."""
+    m = meta("judged")
+    rows = []
+    for scene, label in (("avalanche", "avalanche"), ("default", "default scene")):
+        cells = []
+        for suffix, what in (("", "defaults"), ("_certified", "pairs certified apart")):
+            source = f"judged/judged_{scene}{suffix}.txt"
+            line = next((l for l in read_text("judged", f"judged_{scene}{suffix}.txt").splitlines()
+                         if l.startswith("| all |")), None)
+            found = line and re.search(r"(\d+): (\d+) of (\d+) deep rays missed, (\d+) false; (\d+) pairs missed; "
+                                       r"(\d+) of (\d+) contacts over the truth", line)
+            if not found:
+                raise ResultError(f"{RESULTS}/{source}: no judged 'all' row")
+            steps, missed, deep, false, pairs, over, contacts = found.groups()
+            cells.append(f"{what}: {pairs} pairs missed, {missed} of {deep} deep origins, {false} false, "
+                         f"{over} of {contacts} contacts over the truth")
+        rows.append(Row(f"{label}, every step judged by the exact reference ({steps} steps, 2 threads)",
+                        "; ".join(cells), "judged", "judged/README.md", [m]))
+    return rows
+
+
 def all_rows():
     return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + truth_rows()
-            + zoo_rows() + piles_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows())
+            + zoo_rows() + piles_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows() + judged_rows())
 
 
 # ---------------------------------------------------------------- blocks
