@@ -34,7 +34,7 @@ RESULTS = os.path.join("docs", "results")
 # The folders, in the order docs/results/README.md lists them.
 FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "piles", "opencl", "gpu", "threshold-sweep",
            "accuracy-sweep",
-           "edges", "python", "campaign", "judged"]
+           "edges", "python", "campaign", "judged", "floors"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
 
