@@ -49,7 +49,8 @@ void run(benchmark::State& state, const std::string& backend, Mode mode, bool ve
   Scene s = make_scene(backend, mode, int(state.range(0)), verify_walks);
   s.narrow->detect(s.pairs);  // the first, full step
   size_t rays = 0, steps = 0, contacts = 0, walk_steps = 0, fold_casts = 0, up = 0, down = 0;
-  double prepare = 0, trace = 0, gather = 0;
+  size_t launches = 0, waits = 0;
+  double prepare = 0, trace = 0, gather = 0, device = 0;
   StepResult r;  // reused: a host keeps its result buffers across steps
   for (auto _ : state) {
     const double jitter = (steps % 2 ? 1e-3 : 0.0);
@@ -65,6 +66,9 @@ void run(benchmark::State& state, const std::string& backend, Mode mode, bool ve
     fold_casts += r.stats.fold_casts;
     up += r.stats.bytes_to_device;
     down += r.stats.bytes_from_device;
+    launches += r.stats.device_launches;
+    waits += r.stats.device_waits;
+    device += r.stats.seconds_device_kernels;
     prepare += r.stats.seconds_prepare;
     trace += r.stats.seconds_full + r.stats.seconds_iterative;
     gather += r.stats.seconds_gather;
@@ -81,6 +85,11 @@ void run(benchmark::State& state, const std::string& backend, Mode mode, bool ve
   if (up + down > 0) {
     state.counters["bytes up/step"] = double(up) / double(steps);
     state.counters["bytes down/step"] = double(down) / double(steps);
+    // What driving the devices took: kernels enqueued, blocking waits, and
+    // the kernels' own time (profiling events), beside the ray stage's wall time.
+    state.counters["launches/step"] = double(launches) / double(steps);
+    state.counters["waits/step"] = double(waits) / double(steps);
+    state.counters["kernels us"] = 1e6 * device / double(steps);
   }
   if (mode == Mode::iterative) {
     state.counters["walk steps/ray"] = double(walk_steps) / double(rays);

@@ -115,7 +115,8 @@ inline void expect_same_step(const StepResult& x, const StepResult& y, const std
 }
 
 // Where two runs of one backend sent their rays: the same bytes to and from
-// each device, the same jobs and rays on each, the same fallback.
+// each device, the same jobs, rays, commands and waits on each, the same
+// fallback.
 inline void expect_same_placement(const StepStats& a, const StepStats& b, const std::string& where) {
   SCOPED_TRACE(where);
   EXPECT_EQ(a.bytes_to_device, b.bytes_to_device);
@@ -124,6 +125,10 @@ inline void expect_same_placement(const StepStats& a, const StepStats& b, const 
   for (size_t d = 0; d < a.devices.size(); ++d) {
     EXPECT_EQ(a.devices[d].jobs, b.devices[d].jobs) << "device " << d;
     EXPECT_EQ(a.devices[d].rays, b.devices[d].rays) << "device " << d;
+    EXPECT_EQ(a.devices[d].launches, b.devices[d].launches) << "device " << d;
+    EXPECT_EQ(a.devices[d].writes, b.devices[d].writes) << "device " << d;
+    EXPECT_EQ(a.devices[d].reads, b.devices[d].reads) << "device " << d;
+    EXPECT_EQ(a.devices[d].waits, b.devices[d].waits) << "device " << d;
   }
   EXPECT_EQ(a.cpu_fallback, b.cpu_fallback);
 }

@@ -24,6 +24,8 @@ struct Sum {
   size_t missed_pairs = 0, truth_checked = 0, over_reports = 0;
   size_t certified = 0, granted = 0, expired = 0;
   RayCounts counts;
+  // Device backends: commands, waits, traffic and device time (ReplayStep).
+  double launches = 0, writes = 0, reads = 0, waits = 0, bytes_to = 0, bytes_from = 0, kernels = 0, copies = 0;
 
   void add(uint64_t step, const experiments::ReplayStep& s) {
     ++steps;
@@ -43,6 +45,14 @@ struct Sum {
     granted += s.certificates_granted;
     expired += s.certificates_expired;
     counts += s.counts;
+    launches += double(s.device_launches);
+    writes += double(s.device_writes);
+    reads += double(s.device_reads);
+    waits += double(s.device_waits);
+    bytes_to += double(s.bytes_to_device);
+    bytes_from += double(s.bytes_from_device);
+    kernels += s.seconds_device_kernels;
+    copies += s.seconds_device_copies;
     contacts += s.contacts;
     judged += s.judged;
     deep += s.deep;
@@ -90,6 +100,31 @@ void print_devices(const experiments::ReplayRun& run) {
   } else {
     std::printf("; no step fell back to the CPU\n");
   }
+}
+
+// What driving the devices took, per step and phase: commands, blocking
+// waits, bytes each way, and the device's own time from profiling events
+// (kernels: the thesis' ray time; copies apart). Device backends only.
+void print_device_traffic(const std::vector<Sum>& sums) {
+  if (sums.empty() || sums.back().launches == 0) return;
+  std::printf("\n| devices (per step, over all) |");
+  for (const Sum& s : sums) std::printf(" %s |", s.name.c_str());
+  std::printf("\n| :-- |");
+  for (size_t i = 0; i < sums.size(); ++i) std::printf(" --: |");
+  std::printf("\n");
+  const auto row = [&](const char* name, double Sum::*field, double scale, const char* format) {
+    std::printf("| %s |", name);
+    for (const Sum& s : sums) std::printf(format, scale * s.*field / double(std::max<uint64_t>(s.steps, 1)));
+    std::printf("\n");
+  };
+  row("kernel launches", &Sum::launches, 1, " %.1f |");
+  row("writes", &Sum::writes, 1, " %.1f |");
+  row("reads", &Sum::reads, 1, " %.1f |");
+  row("blocking waits", &Sum::waits, 1, " %.1f |");
+  row("KB to the devices", &Sum::bytes_to, 1e-3, " %.1f |");
+  row("KB from the devices", &Sum::bytes_from, 1e-3, " %.1f |");
+  row("kernels (device ms)", &Sum::kernels, 1e3, " %.3f |");
+  row("copies (device ms)", &Sum::copies, 1e3, " %.3f |");
 }
 
 }  // namespace
@@ -157,6 +192,7 @@ int run_replay(const ReplayOptions& o) {
     return 0;
   }
   print_devices(run);
+  print_device_traffic(sums);
   // Where the rays went: each counter of kRayCounters, per step, per phase.
   std::printf("\n| counter (per step) |");
   for (const Sum& s : sums) std::printf(" %s |", s.name.c_str());

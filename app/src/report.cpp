@@ -24,14 +24,26 @@ nlohmann::json stats_json(const StepStats& s) {
   nlohmann::json endings;
   for (int i = 0; i < kLineStatusCount; ++i) endings[line_status_name(i)] = s.walk_endings[i];
   nlohmann::json devices = nlohmann::json::array();
-  for (const DeviceWork& d : s.devices) devices.push_back({{"jobs", d.jobs}, {"rays", d.rays}});
+  for (const DeviceWork& d : s.devices)
+    devices.push_back({{"jobs", d.jobs},
+                       {"rays", d.rays},
+                       {"launches", d.launches},
+                       {"writes", d.writes},
+                       {"reads", d.reads},
+                       {"waits", d.waits},
+                       {"bytes_to_device", d.bytes_to_device},
+                       {"bytes_from_device", d.bytes_from_device},
+                       {"seconds_kernels", d.seconds_kernels},
+                       {"seconds_copies", d.seconds_copies}});
   nlohmann::json j = {{"walk_endings", endings},
           {"devices", devices},
           {"cpu_fallback", s.cpu_fallback.empty() ? nlohmann::json() : nlohmann::json(s.cpu_fallback)},
           {"seconds", {{"prepare", s.seconds_prepare},
                        {"full", s.seconds_full},
                        {"iterative", s.seconds_iterative},
-                       {"gather", s.seconds_gather}}}};
+                       {"gather", s.seconds_gather},
+                       {"device_kernels", s.seconds_device_kernels},
+                       {"device_copies", s.seconds_device_copies}}}};
   for (const StepCounter& c : kStepCounters) j[c.name] = s.*c.field;
   for (const RayCounter& c : kRayCounters) j[c.name] = s.*c.field;
   return j;
@@ -56,6 +68,7 @@ nlohmann::json to_json(const StepResult& step) {
   return {{"colliding", pair.colliding},
           {"mode", to_string(pair.mode)},
           {"max_depth", pair.max_depth},
+          {"device", pair.device},
           {"contacts", contacts},
           {"predictive", predictive},
           {"stats", stats_json(step.stats)}};

@@ -79,6 +79,13 @@ struct Device {
   bool keeps = false;              // some job of the batch keeps a residence
   Transfers moved;
   DeviceWork work;  // this step's, over its batches
+  // Commands whose device time is not counted yet (profiling events, kernel
+  // or copy); kept until seen finished.
+  struct Timed {
+    cl::Event event;
+    bool kernel;
+  };
+  std::vector<Timed> timed;
   // This batch: the jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
@@ -112,7 +119,7 @@ class OpenClExecutor final : public RayExecutor {
     try {
       for (const cl::Device& d : runtime_->devices) {
         Device device;
-        device.queue = cl::CommandQueue(runtime_->context, d);
+        device.queue = cl::CommandQueue(runtime_->context, d, CL_QUEUE_PROFILING_ENABLE);
         if (runtime_->place_on_device) {
           device.list = cl::Kernel(runtime_->program, "rtcd_list");
           device.select = cl::Kernel(runtime_->program, "rtcd_select");
@@ -171,7 +178,15 @@ class OpenClExecutor final : public RayExecutor {
 
   void account(StepStats& stats) const override {
     stats.devices.resize(devices_.size());
-    for (size_t i = 0; i < devices_.size(); ++i) stats.devices[i] = devices_[i].work;
+    for (size_t i = 0; i < devices_.size(); ++i) {
+      const DeviceWork& w = stats.devices[i] = devices_[i].work;
+      stats.device_launches += w.launches;
+      stats.device_writes += w.writes;
+      stats.device_reads += w.reads;
+      stats.device_waits += w.waits;
+      stats.seconds_device_kernels += w.seconds_kernels;
+      stats.seconds_device_copies += w.seconds_copies;
+    }
     if (on_cpu_) stats.cpu_fallback = fault_message_;
   }
 
@@ -240,15 +255,47 @@ class OpenClExecutor final : public RayExecutor {
     if (std::max<size_t>(count * sizeof(rtcd_tracked), 64) <= b.bytes) return;
     const cl::Buffer old = b.buffer;
     reserve(b, count * sizeof(rtcd_tracked));
-    if (used > 0) d.queue.enqueueCopyBuffer(old, b.buffer, 0, 0, used * sizeof(rtcd_tracked));
+    if (used > 0) d.queue.enqueueCopyBuffer(old, b.buffer, 0, 0, used * sizeof(rtcd_tracked), nullptr, timed(d, false));
+  }
+
+  // A new command's event, to be timed once it has finished.
+  static cl::Event* timed(Device& d, bool kernel) { return &d.timed.emplace_back(Device::Timed{cl::Event(), kernel}).event; }
+
+  // The host blocks until the command of `done` has finished.
+  static void wait(Device& d, const cl::Event& done) {
+    done.wait();
+    ++d.work.waits;
+  }
+
+  // The device time of every timed command that has finished, into the
+  // step's work; the others stay for a later step.
+  static void collect(Device& d) {
+    size_t kept = 0;
+    for (size_t i = 0; i < d.timed.size(); ++i) {
+      Device::Timed& t = d.timed[i];
+      const cl_int status = t.event.getInfo<CL_EVENT_COMMAND_EXECUTION_STATUS>();
+      if (status > CL_COMPLETE) {
+        if (kept != i) d.timed[kept] = std::move(t);
+        ++kept;
+        continue;
+      }
+      if (status < 0) continue;  // failed: the fault is reported where it struck
+      const double seconds = 1e-9 * double(t.event.getProfilingInfo<CL_PROFILING_COMMAND_END>() -
+                                           t.event.getProfilingInfo<CL_PROFILING_COMMAND_START>());
+      (t.kernel ? d.work.seconds_kernels : d.work.seconds_copies) += seconds;
+    }
+    d.timed.resize(kept);
   }
 
   // `v` into `b` from element `offset` on; `b` holds them already.
   template <class T>
   void write_at(Device& d, GrowingBuffer& b, const std::vector<T>& v, size_t offset) {
     if (v.empty()) return;
-    d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, offset * sizeof(T), v.size() * sizeof(T), v.data());
+    d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, offset * sizeof(T), v.size() * sizeof(T), v.data(), nullptr,
+                               timed(d, false));
     d.moved.to_device += v.size() * sizeof(T);
+    d.work.bytes_to_device += v.size() * sizeof(T);
+    ++d.work.writes;
   }
 
   template <class T>
@@ -259,8 +306,12 @@ class OpenClExecutor final : public RayExecutor {
 
   template <class T>
   void read(Device& d, const GrowingBuffer& b, std::vector<T>& v, cl::Event* done = nullptr) {
-    d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, 0, v.size() * sizeof(T), v.data(), nullptr, done);
+    cl::Event* event = timed(d, false);
+    d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, 0, v.size() * sizeof(T), v.data(), nullptr, event);
+    if (done) *done = *event;
     d.moved.from_device += v.size() * sizeof(T);
+    d.work.bytes_from_device += v.size() * sizeof(T);
+    ++d.work.reads;
   }
 
   // The job's tracked rays are on a device already: they were kept there
@@ -270,10 +321,10 @@ class OpenClExecutor final : public RayExecutor {
            job.residence->step + 1 == step_ && job.residence->place < devices_.size();
   }
 
-  // A job whose tracked rays are on a device walks there; every other job
-  // goes to the device with the fewest expected rays so far. So a pair
-  // stays where it is from one full step to the next, and may move to
-  // rebalance at a full step, when its rays are traced anew.
+  // A pair's two jobs run on one device: the one it ran on before, while it
+  // stays in the broad phase (its residences say which; walking jobs find
+  // their kept rays there), or, for a new pair, the device with the fewest
+  // expected rays so far.
   void assign(std::span<const RayJob> jobs, const Config& config) {
     for (Device& d : devices_) {
       d.batch_jobs.clear();
@@ -289,13 +340,20 @@ class OpenClExecutor final : public RayExecutor {
       d.keeps = false;
       d.moved = {};
     }
-    for (uint32_t j = 0; j < jobs.size(); ++j)
-      if (resident(jobs[j])) add(devices_[jobs[j].residence->place], j, jobs[j], config);
-    for (uint32_t j = 0; j < jobs.size(); ++j) {
-      if (resident(jobs[j])) continue;
-      add(*std::min_element(devices_.begin(), devices_.end(),
-                            [](const Device& a, const Device& b) { return a.load < b.load; }),
-          j, jobs[j], config);
+    // Jobs 2i and 2i + 1 are one pair's (RayBatch).
+    const auto placed = [&](uint32_t j) -> const Residence* {
+      for (uint32_t k : {j, j + 1})
+        if (const Residence* r = jobs[k].residence; r && r->placed && r->place < devices_.size()) return r;
+      return nullptr;
+    };
+    for (uint32_t j = 0; j + 1 < jobs.size(); j += 2)
+      if (const Residence* r = placed(j))
+        for (uint32_t k : {j, j + 1}) add(devices_[r->place], k, jobs[k], config);
+    for (uint32_t j = 0; j + 1 < jobs.size(); j += 2) {
+      if (placed(j)) continue;
+      Device& d = *std::min_element(devices_.begin(), devices_.end(),
+                                    [](const Device& a, const Device& b) { return a.load < b.load; });
+      for (uint32_t k : {j, j + 1}) add(d, k, jobs[k], config);
     }
   }
 
@@ -385,7 +443,9 @@ class OpenClExecutor final : public RayExecutor {
   // every new work-group size they would pick themselves.
   static void launch(Device& d, cl::Kernel& k, size_t n) {
     const size_t group = d.group_size;
-    d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + group - 1) / group * group), cl::NDRange(group));
+    d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + group - 1) / group * group), cl::NDRange(group),
+                                 nullptr, timed(d, true));
+    ++d.work.launches;
   }
 
   // The arguments both trace kernels open with: the jobs, then the shape
@@ -470,7 +530,7 @@ class OpenClExecutor final : public RayExecutor {
     read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
     keep(d, d.first_items, d.items);
     d.queue.flush();
-    d.outcomes_read.wait();
+    wait(d, d.outcomes_read);
     uint32_t n = 0;
     for (size_t l = 0; l < d.host_jobs.size(); ++l) {
       const rtcd_device_job& job = d.host_jobs[l];
@@ -559,7 +619,7 @@ class OpenClExecutor final : public RayExecutor {
       return;
     }
     // Phase 2: compaction and tracing; the outcomes come back.
-    if (runtime_->place_on_device) d.counts_read.wait();
+    if (runtime_->place_on_device) wait(d, d.counts_read);
     first_rays(d);
     if (d.ray_count == 0) return;
     if (runtime_->place_on_device) {
@@ -581,7 +641,7 @@ class OpenClExecutor final : public RayExecutor {
       write(d, d.rays, d.host_rays);
     }
     enqueue_trace(d);
-    d.outcomes_read.wait();
+    wait(d, d.outcomes_read);
   }
 
   Transfers run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
@@ -598,6 +658,7 @@ class OpenClExecutor final : public RayExecutor {
     // slowest device.
     auto run_device = [&](uint32_t i) {
       run_on(devices_[i], inject_mid_step);
+      collect(devices_[i]);
       deliver(i, jobs, outcomes, tallies);
     };
     if (devices_.size() == 1) {
@@ -628,16 +689,18 @@ class OpenClExecutor final : public RayExecutor {
       d.work.jobs += d.host_jobs[l].item_count > 0;
       std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
       if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
-        if (job.residence && runtime_->place_on_device) *job.residence = {step_, i, 0};
+        if (job.residence) *job.residence = {runtime_->place_on_device ? step_ : 0, i, 0, true};
         out.clear();
       } else {
-        if (job.residence && runtime_->place_on_device)
-          *job.residence = {step_, i, d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l])};
+        if (job.residence)
+          *job.residence = {runtime_->place_on_device ? step_ : 0, i,
+                            d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l]), true};
         const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
         out.assign(first, first + d.host_counts[l]);
         d.work.rays += d.host_counts[l];
       }
       tallies[d.batch_jobs[l]] = settle_outcomes(out, job.iterative);
+      tallies[d.batch_jobs[l]].place = int32_t(i);
     }
   }
 

@@ -7,8 +7,13 @@
 
 #include <algorithm>
 #include <chrono>
+#include <condition_variable>
+#include <exception>
 #include <limits>
+#include <mutex>
 #include <optional>
+#include <thread>
+#include <utility>
 
 #include <tbb/task_arena.h>
 
@@ -143,7 +148,19 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::string name() const override { return name_; }
   std::vector<std::string> devices() const override { return devices_; }
 
+  ~PipelineNarrowPhase() override {
+    if (!worker_.joinable()) return;
+    {
+      std::unique_lock lock(mutex_);
+      changed_.wait(lock, [&] { return !running_; });
+      quit_ = true;
+    }
+    changed_.notify_all();
+    worker_.join();
+  }
+
   ShapeId add_shape(std::shared_ptr<const Shape> shape) override {
+    idle("add_shape");
     if (!shape) throw UsageError("add_shape: null shape");
     in_arena([&] { executor_->add_shape(shape); });
     shapes_.emplace_back(std::move(shape), derive_);
@@ -151,12 +168,14 @@ class PipelineNarrowPhase final : public NarrowPhase {
   }
 
   BodyId add_body(ShapeId shape, const Pose& pose) override {
+    idle("add_body");
     if (shape >= shapes_.size()) throw UsageError("add_body: unknown shape " + std::to_string(shape));
     bodies_.push_back({shape, checked(pose), true, {}, 0});
     return BodyId(bodies_.size() - 1);
   }
 
   void remove_body(BodyId body) override {
+    idle("remove_body");
     body_at(body).alive = false;
     size_t kept = 0;
     for (size_t k = 0; k < state_keys_.size(); ++k) {
@@ -170,11 +189,48 @@ class PipelineNarrowPhase final : public NarrowPhase {
     states_.resize(kept);
   }
 
-  void set_pose(BodyId body, const Pose& pose) override { body_at(body).pose = checked(pose); }
+  void set_pose(BodyId body, const Pose& pose) override {
+    idle("set_pose");
+    body_at(body).pose = checked(pose);
+  }
 
   using NarrowPhase::detect;
   void detect(std::span<const BodyPair> pairs, StepResult& out) override {
+    idle("detect");
+    validate(pairs);  // before anything changes: bad input loses no state
     in_arena([&] { step(pairs, out); });
+  }
+
+  void detect_begin(std::span<const BodyPair> pairs, StepResult& out) override {
+    idle("detect_begin");
+    validate(pairs);
+    if (!worker_.joinable()) worker_ = std::thread([this] { work(); });
+    {
+      std::lock_guard lock(mutex_);
+      begun_ = {pairs, &out};
+      running_ = true;
+      error_ = nullptr;
+    }
+    busy_ = true;
+    changed_.notify_all();
+  }
+
+  bool detect_done() const override {
+    if (!busy_) throw UsageError("detect_done: no step begun");
+    std::lock_guard lock(mutex_);
+    return !running_;
+  }
+
+  void detect_end() override {
+    if (!busy_) throw UsageError("detect_end: no step begun");
+    std::exception_ptr error;
+    {
+      std::unique_lock lock(mutex_);
+      changed_.wait(lock, [&] { return !running_; });
+      std::swap(error, error_);
+    }
+    busy_ = false;
+    if (error) std::rethrow_exception(error);
   }
 
  private:
@@ -187,6 +243,30 @@ class PipelineNarrowPhase final : public NarrowPhase {
       work();
   }
   void step(std::span<const BodyPair> pairs, StepResult& out);
+  // Throws when a begun step has not ended: the narrow phase is the step's.
+  void idle(const char* call) const {
+    if (busy_) throw UsageError(std::string(call) + ": a step begun with detect_begin is running; call detect_end first");
+  }
+  // The worker thread: runs each begun step in the arena, then says so.
+  void work() {
+    std::unique_lock lock(mutex_);
+    for (;;) {
+      changed_.wait(lock, [&] { return quit_ || (running_ && begun_.out); });
+      if (quit_) return;
+      const Begun begun = std::exchange(begun_, {});
+      lock.unlock();
+      try {
+        in_arena([&] { step(begun.pairs, *begun.out); });
+      } catch (...) {
+        lock.lock();
+        error_ = std::current_exception();
+        lock.unlock();
+      }
+      lock.lock();
+      running_ = false;
+      changed_.notify_all();
+    }
+  }
 
   struct Body {
     ShapeId shape;
@@ -293,6 +373,18 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::vector<std::pair<uint64_t, uint32_t>> keys_;  // the step's pair keys with their input indices, ascending
   RayBatch batches_[2];                              // by Batch
   std::vector<PairWork> work_;                       // by input index
+  // detect_begin's worker and its handoff: the begun step, whether it runs,
+  // what it threw. busy_ is the caller's side: a step begun and not ended.
+  struct Begun {
+    std::span<const BodyPair> pairs;
+    StepResult* out = nullptr;
+  };
+  std::thread worker_;
+  mutable std::mutex mutex_;
+  std::condition_variable changed_;
+  Begun begun_;
+  bool running_ = false, quit_ = false, busy_ = false;
+  std::exception_ptr error_;
 };
 
 void PipelineNarrowPhase::validate(std::span<const BodyPair> pairs) {
@@ -321,7 +413,6 @@ void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out)
     last = now;
     return seconds;
   };
-  validate(pairs);  // before anything changes: bad input loses no state
   out.stats.reset();
   prepare(pairs, out);
   out.stats.seconds_prepare = lap();
@@ -506,11 +597,11 @@ std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d,
     auto crossed = [](const RayOutcome& o) { return o.kind == RTCD_RAY_PENETRATING; };
     if (!std::is_partitioned(edges, tracked.end(), crossed)) {
       std::partition(edges, tracked.end(), crossed);
-      state.residence[d] = {};
+      state.residence[d].drop_rays();
     }
     return {tracked.data(), size_t(std::partition_point(edges, tracked.end(), crossed) - tracked.begin())};
   }
-  if (state.held[d]) state.residence[d] = {};
+  if (state.held[d]) state.residence[d].drop_rays();
   state.held[d] = false;
   if (config_.edges_beside_contacts) return tracked;
   auto vertex_contact = [](const RayOutcome& o) { return o.edge == 0 && o.kind == RTCD_RAY_PENETRATING; };
@@ -520,7 +611,7 @@ std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d,
   if (!witnessed && !state.resting[d].empty()) {
     tracked.insert(tracked.end(), state.resting[d].begin(), state.resting[d].end());
     state.resting[d].clear();
-    state.residence[d] = {};
+    state.residence[d].drop_rays();
   }
   return tracked;
 }
@@ -584,6 +675,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     pr.first_predictive = predictive;
     pr.predictive_count = pair.predictive;
     pr.colliding = pair.contacts > 0;
+    pr.device = batch.tallies[w.first].place;
     contacts += pair.contacts;
     predictive += pair.predictive;
     outcomes += batch.outcomes[w.first].size() + batch.outcomes[w.first + 1].size();
@@ -672,7 +764,7 @@ void PipelineNarrowPhase::certify(BodyPair p, PairWork& w, const PairResult& pr)
   for (int d : {0, 1}) {
     state.tracked[d].clear();
     state.resting[d].clear();
-    state.residence[d] = {};
+    state.residence[d].drop_rays();
     state.held[d] = false;
   }
 }

@@ -86,6 +86,12 @@ class OursRunner final : public Runner {
     out.counts = s;
     out.bytes_to_device = s.bytes_to_device;
     out.bytes_from_device = s.bytes_from_device;
+    out.device_launches = s.device_launches;
+    out.device_writes = s.device_writes;
+    out.device_reads = s.device_reads;
+    out.device_waits = s.device_waits;
+    out.seconds_device_kernels = s.seconds_device_kernels;
+    out.seconds_device_copies = s.seconds_device_copies;
     out.device_rays.clear();
     for (const DeviceWork& d : s.devices) out.device_rays.push_back(d.rays);
     out.cpu_fallback = s.cpu_fallback;

@@ -131,6 +131,7 @@ class Pairs:
     contact_count: npt.NDArray[np.int64]
     first_predictive: npt.NDArray[np.int64]
     predictive_count: npt.NDArray[np.int64]
+    device: npt.NDArray[np.int32]        # OpenCL: the device the pair ran on; -1 the CPU
 
 class StepResult:
     """What one detect() returned. Arrays are built on first access."""
@@ -168,6 +169,9 @@ class NarrowPhase:
     def set_pose(self, body: int, pose: PoseLike) -> None: ...
     def set_poses(self, bodies: ArrayLike, poses: ArrayLike) -> None: ...
     def detect(self, pairs: ArrayLike) -> StepResult: ...
+    def detect_begin(self, pairs: ArrayLike) -> None: ...   # the step runs while Python does
+    def detect_done(self) -> bool: ...                     # never waits
+    def detect_end(self) -> StepResult: ...
 
 def query(a: ShapeLike, b: ShapeLike, pose_a: PoseLike | None = None, pose_b: PoseLike | None = None, *,
           backend: str = "auto", mode: str = "auto", **knobs: Any) -> StepResult: ...

@@ -115,7 +115,7 @@ py::dict ray_columns(const StepResult& r, bool contacts, bool predictive) {
 
 constexpr const char* kPairColumns[] = {"a",             "b",             "colliding",        "mode",
                                         "max_depth",     "first_contact", "contact_count",    "first_predictive",
-                                        "predictive_count"};
+                                        "predictive_count", "device"};
 
 py::dict pair_columns(const StepResult& r) {
   const size_t n = r.pairs.size();
@@ -125,6 +125,7 @@ py::dict pair_columns(const StepResult& r) {
   auto max_depth = column_of<double>(n);
   auto first_contact = column_of<int64_t>(n), contact_count = column_of<int64_t>(n),
        first_predictive = column_of<int64_t>(n), predictive_count = column_of<int64_t>(n);
+  auto device = column_of<int32_t>(n);
   for (size_t i = 0; i < n; ++i) {
     const PairResult& p = r.pairs[i];
     a.mutable_at(i) = p.pair.a;
@@ -136,10 +137,11 @@ py::dict pair_columns(const StepResult& r) {
     contact_count.mutable_at(i) = int64_t(p.contact_count);
     first_predictive.mutable_at(i) = int64_t(p.first_predictive);
     predictive_count.mutable_at(i) = int64_t(p.predictive_count);
+    device.mutable_at(i) = p.device;
   }
   py::dict d;
   const py::object columns[] = {a,         b,           colliding,     mode,           max_depth,
-                                first_contact, contact_count, first_predictive, predictive_count};
+                                first_contact, contact_count, first_predictive, predictive_count, device};
   for (size_t i = 0; i < std::size(kPairColumns); ++i) d[kPairColumns[i]] = columns[i];
   return d;
 }
@@ -178,6 +180,10 @@ struct PyNarrowPhase {
   // as a C++ host's does: two, since `r = narrow.detect(...)` still holds
   // the last one while the next is made.
   std::array<std::shared_ptr<StepResult>, 2> spare;
+  // A step begun (detect_begin): its pairs, copied so Python may drop its
+  // array, and the result it fills; null when none runs.
+  std::vector<BodyPair> begun_pairs;
+  std::shared_ptr<StepResult> begun;
 
   std::shared_ptr<StepResult> free_result() {
     for (auto& r : spare) {
@@ -401,6 +407,38 @@ call at a time (others wait), two narrow phases run in parallel.)";
           py::arg("pairs"),
           "One step over (p, 2) candidate pairs of body ids. Pair state carries to the next call; a pair absent "
           "from `pairs` is evicted.")
+      .def(
+          "detect_begin",
+          [](PyNarrowPhase& n, py::handle pairs) {
+            const auto a = index_rows(pairs, "pairs", 2);
+            const auto* first = reinterpret_cast<const BodyPair*>(a.data());
+            std::shared_ptr<StepResult> result = n.free_result();
+            n.locked([&](NarrowPhase& p) {
+              if (n.begun) throw UsageError("detect_begin: a step begun with detect_begin is running; call detect_end first");
+              n.begun_pairs.assign(first, first + a.shape(0));
+              p.detect_begin(n.begun_pairs, *result);
+              n.begun = std::move(result);
+            });
+          },
+          py::arg("pairs"),
+          "detect in two halves: starts the step over (p, 2) pairs on the narrow phase's own thread and returns "
+          "at once (bad pairs raise here). Python runs meanwhile; detect_end() waits and returns the StepResult. "
+          "Any other call before detect_end raises.")
+      .def(
+          "detect_done",
+          [](PyNarrowPhase& n) { return n.locked([&](NarrowPhase& p) { return p.detect_done(); }); },
+          "Whether the step detect_begin started has finished (detect_end then returns at once); never waits.")
+      .def(
+          "detect_end",
+          [](PyNarrowPhase& n) {
+            std::shared_ptr<StepResult> result;
+            n.locked([&](NarrowPhase& p) {
+              result = std::exchange(n.begun, nullptr);
+              p.detect_end();
+            });
+            return py::cast(PyStep{std::move(result), {}, {}, {}, {}, {}});
+          },
+          "Waits for the step detect_begin started and returns its StepResult (raises what the step raised).")
       .def("__repr__", [](PyNarrowPhase& n) { return "<rtcd.NarrowPhase " + n.impl->name() + ">"; });
 
   m.def(

@@ -136,9 +136,10 @@ struct Measured {
 };
 
 // Allocations made by `steps` steps after `warmup` steps, B moved by
-// jitter(step) along y.
+// jitter(step) along y; `begun`: each step by detect_begin and detect_end.
 template <class Jitter>
-Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measured& m, const Jitter& jitter) {
+Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measured& m, const Jitter& jitter,
+                                        bool begun = false) {
   StepResult result;
   Allocations before;
   for (int step = 0; step < warmup + steps; ++step) {
@@ -148,7 +149,12 @@ Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measur
       p.position.y() += jitter(step);
       s.narrow->set_pose(s.pairs[i].b, p);
     }
-    s.narrow->detect(s.pairs, result);
+    if (begun) {
+      s.narrow->detect_begin(s.pairs, result);
+      s.narrow->detect_end();
+    } else {
+      s.narrow->detect(s.pairs, result);
+    }
     if (step < warmup) continue;
     const bool all_walked = std::all_of(result.pairs.begin(), result.pairs.end(),
                                         [](const PairResult& p) { return p.mode == PairMode::iterative; });
@@ -206,7 +212,9 @@ TEST_P(SteadyStep, AllocatesNothing) {
   }
   EXPECT_GT(m.contacts, 0u) << "the bodies must be in contact for the test to mean anything";
   // The walking modes' measured steps walk: their buffers are the walks'.
-  if (mode != Mode::full) EXPECT_EQ(m.walked_steps, 10u) << "measured steps in which every pair walked";
+  if (mode != Mode::full) {
+    EXPECT_EQ(m.walked_steps, 10u) << "measured steps in which every pair walked";
+  }
 }
 
 // Pairs apart certified (trace_separated_pairs off), their certificates
@@ -237,6 +245,22 @@ TEST(Allocation, CertifiedStepsAllocateNothing) {
     EXPECT_GT(m.certified, 0u) << "pairs skipped";
     EXPECT_GT(m.granted, 0u) << "certificates granted";
     EXPECT_GT(m.expired, 0u) << "certificates expired";
+  }
+}
+
+// Steps in two halves (detect_begin, detect_end) hand over to the narrow
+// phase's worker thread, started in the warm-up, and allocate nothing.
+TEST(Allocation, BegunStepsAllocateNothing) {
+  for (const std::string backend : {"basic", "embree"}) {
+    SCOPED_TRACE(backend);
+    Steady s = make_steady(backend, Mode::automatic, 16);
+    Measured m;
+    const Allocations made =
+        allocations_in_steady_steps(s, 4, 10, m, [](int step) { return step % 2 ? 1e-3 : 0.0; }, true);
+    EXPECT_EQ(made.cxx, 0u) << "C++ allocations in 10 steps";
+    EXPECT_EQ(made.heap, 0u) << "heap allocations in 10 steps";
+    EXPECT_GT(m.contacts, 0u);
+    EXPECT_EQ(m.walked_steps, 10u);
   }
 }
 

@@ -353,6 +353,59 @@ TEST_P(Conformance, BadCallsAreUsageErrors) {
   EXPECT_THROW(r.narrow->set_pose(r.a, bad), UsageError);
 }
 
+// detect in two halves: the same steps as detect, bit for bit, while the
+// caller works (it polls detect_done, and some polls find the step still
+// running: the caller ran while the step did); bad pairs throw at
+// detect_begin and lose nothing; every other call before detect_end is a
+// UsageError.
+TEST_P(Conformance, BegunStepsEqualDetectWhileTheCallerWorks) {
+  const validation::Family f = validation::make_family("concave");
+  Config config;
+  config.mode = Mode::automatic;
+  auto sync = make_narrow_phase(GetParam(), config), begun = make_narrow_phase(GetParam(), config);
+  std::vector<BodyPair> pairs;
+  std::vector<validation::PosePair> poses;
+  for (NarrowPhase* n : {sync.get(), begun.get()}) {
+    const ShapeId sa = n->add_shape(f.a), sb = n->add_shape(f.b);
+    pairs.clear();
+    poses.clear();
+    for (size_t i = 0; i < 32; ++i) {
+      poses.push_back(validation::random_poses(f, 3, i));
+      pairs.push_back({n->add_body(sa, poses[i].a), n->add_body(sb, poses[i].b)});
+    }
+  }
+  std::vector<StepResult> expected, got;
+  size_t polls_running = 0;
+  for (size_t step = 0; step < 4; ++step) {
+    for (size_t i = 0; i < pairs.size(); ++i) {
+      if (step > 0) poses[i] = validation::moved(f, poses[i], f.step_motion(), 3, step * pairs.size() + i);
+      for (NarrowPhase* n : {sync.get(), begun.get()}) {
+        n->set_pose(pairs[i].a, poses[i].a);
+        n->set_pose(pairs[i].b, poses[i].b);
+      }
+    }
+    expected.push_back(sync->detect(pairs));
+    StepResult& out = got.emplace_back();
+    begun->detect_begin(pairs, out);
+    while (!begun->detect_done()) ++polls_running;
+    EXPECT_THROW(begun->set_pose(pairs[0].a, poses[0].a), UsageError);
+    EXPECT_THROW(begun->detect(pairs), UsageError);
+    EXPECT_THROW(begun->detect_begin(pairs, out), UsageError);
+    begun->detect_end();
+  }
+  EXPECT_GT(expect_same_run(got, expected), 0u);
+  EXPECT_GT(polls_running, 0u) << "every step had ended before the caller looked";
+  EXPECT_THROW(begun->detect_end(), UsageError) << "no step begun";
+  EXPECT_THROW(begun->detect_done(), UsageError);
+  // Bad pairs throw at the start and lose nothing: the next step walks on.
+  const BodyPair self{pairs[0].a, pairs[0].a};
+  StepResult out;
+  EXPECT_THROW(begun->detect_begin(std::span(&self, 1), out), UsageError);
+  begun->detect_begin(pairs, out);
+  begun->detect_end();
+  EXPECT_GT(out.stats.pairs_iterative, 0u);
+}
+
 // Same penetrating vertices, same triangles, depths within 1e-5 relative as
 // the basic traversal, on concave pairs, in full and in iterative steps.
 // Every backend but basic itself.

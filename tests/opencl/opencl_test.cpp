@@ -219,6 +219,89 @@ TEST(OpenCl, TrackedRaysStayOnTheirDevice) {
   }
 }
 
+// What driving a device takes is counted per step: the kernels enqueued,
+// the copies each way, the host's blocking waits, the bytes, and the
+// device's own time from profiling events, summed over the devices in
+// StepStats. Today's path enqueues a fixed set of commands a batch,
+// whatever its pairs and rays; its bytes grow with them.
+TEST(OpenCl, DeviceCommandsAreCountedPerStep) {
+  struct Walking {
+    size_t launches, writes, reads, waits, bytes_to, bytes_from;
+  };
+  std::vector<Walking> walking;
+  for (const size_t pairs : {2, 16}) {
+    SCOPED_TRACE(std::to_string(pairs) + " pairs");
+    const auto steps = run_scene("opencl:devices=1", {"concave", Mode::iterative, pairs, 5});
+    expect_ran_on_devices(steps, 1);
+    for (size_t s = 0; s < steps.size(); ++s) {
+      SCOPED_TRACE("step " + std::to_string(s));
+      const StepStats& st = steps[s].stats;
+      const DeviceWork& w = st.devices.at(0);
+      EXPECT_EQ(st.device_launches, w.launches);
+      EXPECT_EQ(st.device_writes, w.writes);
+      EXPECT_EQ(st.device_reads, w.reads);
+      EXPECT_EQ(st.device_waits, w.waits);
+      EXPECT_EQ(st.bytes_to_device, w.bytes_to_device);
+      EXPECT_EQ(st.bytes_from_device, w.bytes_from_device);
+      EXPECT_EQ(st.seconds_device_kernels, w.seconds_kernels);
+      ASSERT_GT(w.rays, 0u);
+      // Each batch with rays enqueues kernels, copies its jobs up and its
+      // outcomes down, and waits for them at least once.
+      EXPECT_GE(w.launches, 2u);
+      EXPECT_GE(w.writes, 1u);
+      EXPECT_GE(w.reads, 1u);
+      EXPECT_GE(w.waits, 1u);
+      EXPECT_GT(w.bytes_to_device, 0u);
+      EXPECT_GT(w.bytes_from_device, 0u);
+      // Kernels ran on the device, and took some of its time.
+      EXPECT_GT(w.seconds_kernels, 0.0);
+      EXPECT_GT(w.seconds_copies, 0.0);
+      EXPECT_LT(w.seconds_kernels, 60.0);
+    }
+    // The walking steps after the first (whose rays were kept on the device).
+    for (size_t s = 2; s < steps.size(); ++s) {
+      const DeviceWork& w = steps[s].stats.devices[0];
+      EXPECT_EQ(w.launches, steps[2].stats.devices[0].launches) << "step " << s;
+      EXPECT_EQ(w.waits, steps[2].stats.devices[0].waits) << "step " << s;
+    }
+    const DeviceWork& w = steps.back().stats.devices[0];
+    walking.push_back({w.launches, w.writes, w.reads, w.waits, w.bytes_to_device, w.bytes_from_device});
+  }
+  // The same commands and waits for 2 pairs and for 16; more bytes.
+  EXPECT_EQ(walking[0].launches, walking[1].launches);
+  EXPECT_EQ(walking[0].writes, walking[1].writes);
+  EXPECT_EQ(walking[0].reads, walking[1].reads);
+  EXPECT_EQ(walking[0].waits, walking[1].waits);
+  EXPECT_LT(walking[0].bytes_to, walking[1].bytes_to);
+  EXPECT_LT(walking[0].bytes_from, walking[1].bytes_from);
+}
+
+// A pair stays on one device while it stays in the broad phase: the full
+// steps equation 2.1 sends it back to run where its walks ran, both of its
+// directions together, and the pairs are spread over both devices. The CPU
+// backends say -1.
+TEST(OpenCl, PairsKeepTheirDevice) {
+  Scene scene{"concave", Mode::automatic, 24, 40};
+  // Walks end every few steps, so the pairs are traced in full again often.
+  scene.config.displacement_threshold = 2.5 * validation::make_family("concave").step_motion();
+  const auto steps = run_scene("opencl", scene);
+  expect_ran_on_devices(steps, 2);
+  size_t sent_back = 0, walked = 0;
+  std::set<int32_t> used;
+  for (const PairResult& p : steps[0].pairs) used.insert(p.device);
+  EXPECT_EQ(used, (std::set<int32_t>{0, 1}));
+  for (size_t s = 1; s < steps.size(); ++s) {
+    sent_back += steps[s].stats.fallbacks_to_full;
+    walked += steps[s].stats.pairs_iterative;
+    for (size_t i = 0; i < steps[s].pairs.size(); ++i)
+      EXPECT_EQ(steps[s].pairs[i].device, steps[0].pairs[i].device) << "step " << s << ", pair " << i;
+  }
+  EXPECT_GT(sent_back, 24u) << "few walks ended: the test shows nothing";
+  EXPECT_GT(walked, 24u);
+  const auto cpu = run_scene("basic", {"concave", Mode::full, 2, 1});
+  for (const PairResult& p : cpu[0].pairs) EXPECT_EQ(p.device, -1);
+}
+
 // Both layouts (by default grid for iterative batches, compacted for full
 // ones) trace the same rays in the same order, on BVH and brute force.
 TEST(OpenCl, LayoutsAgree) {

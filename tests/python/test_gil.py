@@ -52,3 +52,31 @@ def test_detect_releases_the_gil(blobs, resting_x):
     share = loop_cpu / inside[0]
     # Near 1 on an idle machine when released; a few percent when held.
     assert share > 0.3, f"the loop got {share:.2f} of the steps' time in CPU: the GIL was held through them"
+
+
+def test_detect_begin_lets_python_run_until_detect_end(blobs, resting_x):
+    """detect_begin returns while the step runs on the narrow phase's own
+    thread: Python polls detect_done and finds it still running at least
+    once over the steps; detect_end returns the same step detect() gives
+    a twin narrow phase, and any call in between raises."""
+    import numpy as np
+    import pytest
+
+    import rtcd
+
+    begun, pairs = resting_rig(blobs, resting_x, mode="full", copies=64, threads=1)
+    twin, _ = resting_rig(blobs, resting_x, mode="full", copies=64, threads=1)
+    running_polls = 0
+    for _ in range(3):
+        begun.detect_begin(pairs)
+        while not begun.detect_done():
+            running_polls += 1
+        with pytest.raises(rtcd.UsageError, match="detect_end first"):
+            begun.detect(pairs)
+        got, expected = begun.detect_end(), twin.detect(pairs)
+        assert len(got.contacts) > 0
+        for column in ("depth", "vertex", "triangle"):
+            assert np.array_equal(got.contacts[column], expected.contacts[column])
+    assert running_polls > 0, "each step had ended before Python looked"
+    with pytest.raises(rtcd.UsageError, match="no step begun"):
+        begun.detect_end()

@@ -43,6 +43,18 @@ class NarrowPhase {
     return out;
   }
 
+  // detect in two halves, so a host works while the step runs (on the
+  // narrow phase's own worker thread, started at the first call):
+  // detect_begin checks the pairs (bad input throws here and loses nothing)
+  // and starts the step; detect_done says whether it has finished, without
+  // waiting; detect_end waits for it and throws what it threw. Until
+  // detect_end returns, `pairs` and `out` are the step's, and every other
+  // call on this narrow phase throws UsageError. A steady step allocates
+  // nothing here either.
+  virtual void detect_begin(std::span<const BodyPair> pairs, StepResult& out) = 0;
+  virtual bool detect_done() const = 0;
+  virtual void detect_end() = 0;
+
  protected:
   explicit NarrowPhase(Config config) : config_(config) { config_.validate(); }
   Config config_;

@@ -97,6 +97,9 @@ struct PairResult {
   bool colliding = false;
   PairMode mode = PairMode::full;
   double max_depth = 0.0;
+  // Device backends: the device its rays ran on (a pair stays on one while
+  // it stays in the broad phase); -1: the CPU, or no rays (certified).
+  int32_t device = -1;
   // Ranges into StepResult::contacts and ::predictive.
   size_t first_contact = 0, contact_count = 0;
   size_t first_predictive = 0, predictive_count = 0;
@@ -154,10 +157,21 @@ inline constexpr RayCounter kRayCounters[] = {
      "edges_tested)"},
 };
 
-// One device's share of a step's rays (OpenCL backends).
+// One device's share of a step (OpenCL backends): its rays, and what driving
+// it took — commands, the host's waits on it, bytes each way, and the
+// device's own time from its queue's profiling events.
 struct DeviceWork {
   size_t jobs = 0;  // pair-directions it ran, those with ray origins to try
   size_t rays = 0;  // candidate rays it traced or walked
+  size_t launches = 0;  // kernels enqueued
+  size_t writes = 0, reads = 0;  // copies enqueued from the host, to the host
+  size_t waits = 0;  // times the host blocked until the device was done with something
+  size_t bytes_to_device = 0, bytes_from_device = 0;
+  // Run time of its kernels and of its copies, each command from its start
+  // to its end on the device. A command still running when the step ends (the
+  // kernel keeping the tracked rays, enqueued after the last read) is
+  // counted in the step in which it is seen finished.
+  double seconds_kernels = 0, seconds_copies = 0;
 };
 
 // The step's counters beside the ray counters: kStepCounters says what each counts.
@@ -166,6 +180,10 @@ struct StepStats : RayCounts {
   size_t fallbacks_to_full = 0;
   size_t pairs_certified = 0, certificates_granted = 0, certificates_expired = 0;
   size_t bytes_to_device = 0, bytes_from_device = 0;
+  // Over the devices (DeviceWork): kernels enqueued, copies each way,
+  // blocking waits; their kernels' and copies' device time.
+  size_t device_launches = 0, device_writes = 0, device_reads = 0, device_waits = 0;
+  double seconds_device_kernels = 0, seconds_device_copies = 0;
   // Where the rays ran: one entry per device of a device backend, in its
   // order (empty on the CPU backends); rays the CPU ran in a device's stead
   // are in no entry.
@@ -202,6 +220,10 @@ inline constexpr StepCounter kStepCounters[] = {
      "certified pairs whose motion passed their margin, traced in full this step"},
     {"bytes_to_device", &StepStats::bytes_to_device, "bytes copied from the host to the devices (0 on the CPU)"},
     {"bytes_from_device", &StepStats::bytes_from_device, "bytes copied from the devices to the host (0 on the CPU)"},
+    {"device_launches", &StepStats::device_launches, "kernels enqueued on the devices (0 on the CPU)"},
+    {"device_writes", &StepStats::device_writes, "copies enqueued from the host to the devices"},
+    {"device_reads", &StepStats::device_reads, "copies enqueued from the devices to the host"},
+    {"device_waits", &StepStats::device_waits, "times the host blocked until a device had finished a command"},
 };
 
 struct StepResult {

@@ -29,14 +29,18 @@ namespace rtcd {
 // take over a pair without tracing it again.
 using RayOutcome = rtcd_outcome;
 
-// Where an executor left a pair-direction's tracked rays after a step (on
-// the device that ran it, say), so the next step's walks run there without
-// sending them again. The executor's own note: the pipeline keeps it with
-// the pair's state and drops it with that state.
+// Where an executor ran a pair-direction and left its tracked rays after a
+// step (on a device, say), so the next step's walks run there without
+// sending them again, and the pair stays there. The executor's own note:
+// the pipeline keeps it with the pair's state and drops it with that state;
+// when the rays there no longer match the pair's (drop_rays), the place stays.
 struct Residence {
-  uint64_t step = 0;   // the executor's step (begin_step) that wrote it; 0: none
-  uint32_t place = 0;  // where, in the executor's numbering (a device)
-  uint32_t first = 0;  // the first of the rays there
+  uint64_t step = 0;    // the executor's step (begin_step) that wrote the rays; 0: none
+  uint32_t place = 0;   // where, in the executor's numbering (a device)
+  uint32_t first = 0;   // the first of the rays there
+  bool placed = false;  // the pair-direction has run at `place`
+
+  void drop_rays() { step = 0; }
 };
 
 // One direction of one pair: the source's rays against the target.
@@ -107,6 +111,10 @@ struct RayTally : RayCounts {
     ++edges_held;
     ++rays_watched;
   }
+  // Where the job's rays ran, in the executor's numbering (a device); -1:
+  // on the CPU. Not summed.
+  int32_t place = -1;
+
   RayTally& operator+=(const RayTally& other);
 };
 
@@ -120,7 +128,8 @@ RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative);
 
 // One of a step's two batches (Algorithm 2): the pair-directions traced in
 // full, or those walked from last step's rays; the pipeline never mixes the
-// two. Job j's outcomes and tally are at index j beside it.
+// two. Jobs 2i and 2i + 1 are one pair's two directions. Job j's outcomes
+// and tally are at index j beside it.
 struct RayBatch {
   bool iterative = false;
   std::vector<RayJob> jobs;
