@@ -13,6 +13,7 @@
 #include "rtcd/app/inputs.hpp"
 #include "rtcd/app/knobs.hpp"
 #include "rtcd/app/replay.hpp"
+#include "rtcd/app/view.hpp"
 #include "rtcd/app/report.hpp"
 #include "rtcd/app/run.hpp"
 #include "rtcd/app/validate.hpp"
@@ -212,6 +213,11 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(uint64_t(1), uint64_t(1'000'000'000)));
   rtcd::cli::add_knobs(*replay, ro.knobs);
 
+  rtcd::app::ViewOptions vo;
+  auto* view = app.add_subcommand("view", "A recording to watch: one glTF 2.0 binary (meshes, a node per body, a keyframe per step)");
+  view->add_option("RECORDING", vo.recording, "recording.rtcdrec (rtcd run --record, rtcd bench)")->required();
+  view->add_option("--gltf", vo.gltf, "The .glb to write (Blender and any glTF viewer open it)")->required();
+
   try {
     app.parse(argc, argv);
     if (*backends) return run_backends(backends_json);
@@ -230,6 +236,7 @@ int main(int argc, char** argv) {
     }
     if (*check) return rtcd::app::run_check(c);
     if (*replay) return rtcd::app::run_replay(ro);
+    if (*view) return rtcd::app::run_view(vo);
     if (*validate) {
       if (sweep && v.sweep_csv.empty()) v.sweep_csv = "-";
       if (!sweep && !v.sweep_csv.empty()) throw rtcd::UsageError("--csv needs --sweep");

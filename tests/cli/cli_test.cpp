@@ -8,7 +8,10 @@
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <tuple>
 
+#include <assimp/Importer.hpp>
+#include <assimp/scene.h>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -260,6 +263,64 @@ TEST(CliQuery, SizesOutsideTheSupportedRangeAreRefused) {
 }  // namespace
 
 namespace {
+
+// Meshes and bodies of an imported glTF: nodes that draw a mesh, and the
+// triangles of every mesh.
+size_t drawn_nodes(const aiNode* n) {
+  size_t count = n->mNumMeshes > 0;
+  for (unsigned c = 0; c < n->mNumChildren; ++c) count += drawn_nodes(n->mChildren[c]);
+  return count;
+}
+
+// A recorded run as glTF: read back, one drawn node and one animation
+// channel per body (the ground too), a keyframe per recorded step, every
+// kind's mesh (the sphere and the box tessellated, the ground a square);
+// a bad recording or an unwritable path exits 2, names it, writes nothing.
+TEST_F(CliFiles, ViewWritesARecordingAsGltf) {
+  const std::string recording = (dir_ / "stack.rtcdrec").string(), glb = (dir_ / "stack.glb").string();
+  const Outcome ran = run("run " + std::string(RTCD_DATA_DIR) + "/scenes/stack.json --steps 20 --no-plots --record " +
+                          recording + " --out " + (dir_ / "run").string());
+  ASSERT_EQ(ran.code, 0) << ran.out;
+  const Outcome viewed = run("view " + recording + " --gltf " + glb);
+  ASSERT_EQ(viewed.code, 0) << viewed.out;
+  EXPECT_NE(viewed.out.find(": 13 bodies, 6 meshes ("), std::string::npos) << viewed.out;
+  EXPECT_NE(viewed.out.find(" 20 keyframes of "), std::string::npos) << viewed.out;
+  Assimp::Importer importer;
+  const aiScene* scene = importer.ReadFile(glb, 0);
+  ASSERT_NE(scene, nullptr) << importer.GetErrorString();
+  EXPECT_EQ(drawn_nodes(scene->mRootNode), 13u);
+  ASSERT_EQ(scene->mNumMeshes, 6u);
+  size_t triangles = 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) triangles += scene->mMeshes[m]->mNumFaces;
+  EXPECT_NE(viewed.out.find(std::to_string(triangles).append(" triangles)")), std::string::npos) << viewed.out;
+  ASSERT_EQ(scene->mNumAnimations, 1u);
+  ASSERT_EQ(scene->mAnimations[0]->mNumChannels, 13u);
+  for (unsigned c = 0; c < 13; ++c) {
+    EXPECT_EQ(scene->mAnimations[0]->mChannels[c]->mNumPositionKeys, 20u) << c;
+    EXPECT_EQ(scene->mAnimations[0]->mChannels[c]->mNumRotationKeys, 20u) << c;
+  }
+  // The blobs fall: a blob's first and last keyframes differ in height.
+  const aiNodeAnim* blob = nullptr;
+  for (unsigned c = 0; c < 13; ++c)
+    if (std::string(scene->mAnimations[0]->mChannels[c]->mNodeName.C_Str()).find(": blob") != std::string::npos)
+      blob = scene->mAnimations[0]->mChannels[c];
+  ASSERT_NE(blob, nullptr);
+  EXPECT_LT(blob->mPositionKeys[19].mValue.z, blob->mPositionKeys[0].mValue.z - 0.01f);
+
+  const std::string junk = write("junk.rtcdrec", "RTCDREC1 and then nothing sensible");
+  const std::string nowhere = (dir_ / "no_such_folder" / "x.glb").string();
+  for (const auto& [args, fragment, file] : std::vector<std::tuple<std::string, std::string, std::string>>{
+           {"view " + junk + " --gltf " + (dir_ / "junk.glb").string(), "junk.rtcdrec", (dir_ / "junk.glb").string()},
+           {"view " + recording + " --gltf " + nowhere, "no_such_folder", nowhere},
+           {"view " + recording, "--gltf", ""}}) {
+    const Outcome r = run(args);
+    EXPECT_EQ(r.code, 2) << args << ": " << r.out;
+    EXPECT_NE(r.out.find(fragment), std::string::npos) << args << ": " << r.out;
+    if (!file.empty()) {
+      EXPECT_FALSE(std::filesystem::exists(file)) << file;
+    }
+  }
+}
 
 // The first second of the small stream through the whole bench, then its
 // recording replayed; bad bench inputs exit 2 with one line.
