@@ -68,22 +68,30 @@ void require_same(const StepResult& x, const StepResult& y, const std::string& w
 }
 
 // The device ran the step, not the CPU fallback (whose answers equal
-// `basic` by design): no fallback, every candidate ray on a device, and the
-// first step's jobs (no pair state yet, so none is tied to a device) spread
-// over as many devices as there are jobs.
-void require_on_devices(const StepResult& step, bool first, const std::string& where) {
+// `basic` by design): no fallback, every candidate ray on a device, and each
+// pair's two directions on one device, its own (PairResult::device), the
+// one it first ran on (`first_devices`, filled at the first step).
+void require_on_devices(const StepResult& step, std::vector<int32_t>& first_devices, const std::string& where) {
   const StepStats& s = step.stats;
   fuzz::require(s.cpu_fallback.empty(), where + ": fell back to the CPU: " + s.cpu_fallback);
   fuzz::require(!s.devices.empty(), where + ": no device work reported");
-  size_t rays = 0, jobs = 0, busy = 0;
+  size_t rays = 0, busy = 0;
   for (const DeviceWork& d : s.devices) {
     rays += d.rays;
-    jobs += d.jobs;
     busy += d.jobs > 0;
   }
   const size_t items = s.candidates + s.edges_tested;
   fuzz::require(rays == items, where + ": " + std::to_string(items - rays) + " rays and edges not run on a device");
-  if (first) fuzz::require(busy == std::min(jobs, s.devices.size()), where + ": jobs left on one device");
+  fuzz::require(busy <= step.pairs.size(), where + ": a pair's directions on two devices");
+  if (first_devices.empty())
+    for (const PairResult& p : step.pairs) first_devices.push_back(p.device);
+  for (size_t i = 0; i < step.pairs.size(); ++i) {
+    const int32_t d = step.pairs[i].device;
+    if (step.pairs[i].mode == PairMode::certified) continue;
+    fuzz::require(d >= 0 && size_t(d) < s.devices.size(), where + ": a pair on no device");
+    fuzz::require(d == first_devices[i], where + ": a pair moved from device " + std::to_string(first_devices[i]) +
+                                             " to " + std::to_string(d));
+  }
 }
 
 }  // namespace
@@ -93,8 +101,9 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t length) {
   if (!input) return 0;
   const std::vector<StepResult> device = fuzz::run_pair_case(*input, "opencl-basic");
   const std::vector<StepResult> cpu = fuzz::run_pair_case(*input, "basic");
+  std::vector<int32_t> first_devices;
   for (int s = 0; s < input->steps; ++s) {
-    require_on_devices(device[s], s == 0, "step " + std::to_string(s));
+    require_on_devices(device[s], first_devices, "step " + std::to_string(s));
     require_same(device[s], cpu[s], "step " + std::to_string(s));
   }
   return 0;
