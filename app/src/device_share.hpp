@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/results.hpp"
+
 namespace rtcd::app {
 
 struct DeviceShare {
@@ -15,9 +17,9 @@ struct DeviceShare {
   std::optional<uint64_t> fallback_step;
   std::string fallback_reason;
 
-  void add(uint64_t step, const std::vector<size_t>& device_rays, const std::string& cpu_fallback) {
-    rays.resize(std::max(rays.size(), device_rays.size()));
-    for (size_t d = 0; d < device_rays.size(); ++d) rays[d] += device_rays[d];
+  void add(uint64_t step, const std::vector<DeviceWork>& devices, const std::string& cpu_fallback) {
+    rays.resize(std::max(rays.size(), devices.size()));
+    for (size_t d = 0; d < devices.size(); ++d) rays[d] += devices[d].rays;
     if (!fallback_step && !cpu_fallback.empty()) {
       fallback_step = step;
       fallback_reason = cpu_fallback;

@@ -24,8 +24,7 @@ struct Sum {
   size_t missed_pairs = 0, truth_checked = 0, over_reports = 0;
   size_t certified = 0, granted = 0, expired = 0;
   RayCounts counts;
-  // Device backends: commands, waits, traffic and device time (ReplayStep).
-  double launches = 0, writes = 0, reads = 0, waits = 0, bytes_to = 0, bytes_from = 0, kernels = 0, copies = 0;
+  DeviceWork devices;  // device backends: over the devices and steps
 
   void add(uint64_t step, const experiments::ReplayStep& s) {
     ++steps;
@@ -45,14 +44,7 @@ struct Sum {
     granted += s.certificates_granted;
     expired += s.certificates_expired;
     counts += s.counts;
-    launches += double(s.device_launches);
-    writes += double(s.device_writes);
-    reads += double(s.device_reads);
-    waits += double(s.device_waits);
-    bytes_to += double(s.bytes_to_device);
-    bytes_from += double(s.bytes_from_device);
-    kernels += s.seconds_device_kernels;
-    copies += s.seconds_device_copies;
+    for (const DeviceWork& d : s.devices) devices += d;
     contacts += s.contacts;
     judged += s.judged;
     deep += s.deep;
@@ -90,7 +82,7 @@ void print_row(const Sum& s, bool ours) {
 // first step that fell back to the CPU, with why.
 void print_devices(const experiments::ReplayRun& run) {
   DeviceShare share;
-  for (uint64_t k = 0; k < run.steps.size(); ++k) share.add(k, run.steps[k].device_rays, run.steps[k].cpu_fallback);
+  for (uint64_t k = 0; k < run.steps.size(); ++k) share.add(k, run.steps[k].devices, run.steps[k].cpu_fallback);
   if (share.rays.empty() && !share.fallback_step) return;  // a CPU backend
   std::printf("\nRays by device:");
   for (size_t d = 0; d < share.rays.size(); ++d) std::printf(" [%zu] %zu", d, share.rays[d]);
@@ -106,25 +98,25 @@ void print_devices(const experiments::ReplayRun& run) {
 // waits, bytes each way, and the device's own time from profiling events
 // (kernels: the thesis' ray time; copies apart). Device backends only.
 void print_device_traffic(const std::vector<Sum>& sums) {
-  if (sums.empty() || sums.back().launches == 0) return;
+  if (sums.empty() || sums.back().devices.launches == 0) return;
   std::printf("\n| devices (per step, over all) |");
   for (const Sum& s : sums) std::printf(" %s |", s.name.c_str());
   std::printf("\n| :-- |");
   for (size_t i = 0; i < sums.size(); ++i) std::printf(" --: |");
   std::printf("\n");
-  const auto row = [&](const char* name, double Sum::*field, double scale, const char* format) {
+  const auto row = [&](const char* name, auto field, double scale, const char* format) {
     std::printf("| %s |", name);
-    for (const Sum& s : sums) std::printf(format, scale * s.*field / double(std::max<uint64_t>(s.steps, 1)));
+    for (const Sum& s : sums) std::printf(format, scale * double(s.devices.*field) / double(std::max<uint64_t>(s.steps, 1)));
     std::printf("\n");
   };
-  row("kernel launches", &Sum::launches, 1, " %.1f |");
-  row("writes", &Sum::writes, 1, " %.1f |");
-  row("reads", &Sum::reads, 1, " %.1f |");
-  row("blocking waits", &Sum::waits, 1, " %.1f |");
-  row("KB to the devices", &Sum::bytes_to, 1e-3, " %.1f |");
-  row("KB from the devices", &Sum::bytes_from, 1e-3, " %.1f |");
-  row("kernels (device ms)", &Sum::kernels, 1e3, " %.3f |");
-  row("copies (device ms)", &Sum::copies, 1e3, " %.3f |");
+  row("kernel launches", &DeviceWork::launches, 1, " %.1f |");
+  row("writes", &DeviceWork::writes, 1, " %.1f |");
+  row("reads", &DeviceWork::reads, 1, " %.1f |");
+  row("blocking waits", &DeviceWork::waits, 1, " %.1f |");
+  row("KB to the devices", &DeviceWork::bytes_to_device, 1e-3, " %.1f |");
+  row("KB from the devices", &DeviceWork::bytes_from_device, 1e-3, " %.1f |");
+  row("kernels (device ms)", &DeviceWork::seconds_kernels, 1e3, " %.3f |");
+  row("copies (device ms)", &DeviceWork::seconds_copies, 1e3, " %.3f |");
 }
 
 }  // namespace

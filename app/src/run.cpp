@@ -128,7 +128,7 @@ int run_scene(const RunOptions& o, fs::path* folder) {
       totals.pairs += double(r.pairs);
       totals.rays += double(r.rays.rays());
       totals.contacts += double(r.contacts);
-      devices.add(r.step, r.device_rays, r.cpu_fallback);
+      devices.add(r.step, r.devices, r.cpu_fallback);
       if (snapshot_at.contains(i)) {
         const fs::path png = dir / ("snapshot_" + std::to_string(i) + ".png");
         sim::write_png(png.string(), simulation.snapshot(scene.snapshot_width, scene.snapshot_height, o.full_rays));

@@ -77,7 +77,6 @@ struct Device {
   uint32_t upload_base = 0;        // this batch's uploaded tracked rays in the read buffer
   uint32_t kept_base = 0;          // this batch's kept rays in the written buffer
   bool keeps = false;              // some job of the batch keeps a residence
-  Transfers moved;
   DeviceWork work;  // this step's, over its batches
   // Commands whose device time is not counted yet (profiling events, kernel
   // or copy); kept until seen finished.
@@ -162,7 +161,7 @@ class OpenClExecutor final : public RayExecutor {
     if (cpu_) cpu_->configure(config);
   }
 
-  Transfers execute(RayBatch& batch) override {
+  void execute(RayBatch& batch) override {
     if (fault_message_.empty()) {
       try {
         return run(batch.jobs, config_, batch.outcomes, batch.tallies);
@@ -173,7 +172,7 @@ class OpenClExecutor final : public RayExecutor {
       }
     }
     on_cpu_ = true;
-    return cpu().execute(batch);
+    cpu().execute(batch);
   }
 
   void account(StepStats& stats) const override {
@@ -184,6 +183,8 @@ class OpenClExecutor final : public RayExecutor {
       stats.device_writes += w.writes;
       stats.device_reads += w.reads;
       stats.device_waits += w.waits;
+      stats.bytes_to_device += w.bytes_to_device;
+      stats.bytes_from_device += w.bytes_from_device;
       stats.seconds_device_kernels += w.seconds_kernels;
       stats.seconds_device_copies += w.seconds_copies;
     }
@@ -293,7 +294,6 @@ class OpenClExecutor final : public RayExecutor {
     if (v.empty()) return;
     d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, offset * sizeof(T), v.size() * sizeof(T), v.data(), nullptr,
                                timed(d, false));
-    d.moved.to_device += v.size() * sizeof(T);
     d.work.bytes_to_device += v.size() * sizeof(T);
     ++d.work.writes;
   }
@@ -309,7 +309,6 @@ class OpenClExecutor final : public RayExecutor {
     cl::Event* event = timed(d, false);
     d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, 0, v.size() * sizeof(T), v.data(), nullptr, event);
     if (done) *done = *event;
-    d.moved.from_device += v.size() * sizeof(T);
     d.work.bytes_from_device += v.size() * sizeof(T);
     ++d.work.reads;
   }
@@ -338,7 +337,6 @@ class OpenClExecutor final : public RayExecutor {
       d.load = 0;
       d.upload_base = runtime_->place_on_device ? d.kept_used[(step_ + 1) % 2] : 0;
       d.keeps = false;
-      d.moved = {};
     }
     // Jobs 2i and 2i + 1 are one pair's (RayBatch).
     const auto placed = [&](uint32_t j) -> const Residence* {
@@ -644,7 +642,7 @@ class OpenClExecutor final : public RayExecutor {
     wait(d, d.outcomes_read);
   }
 
-  Transfers run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
+  void run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
                 std::span<RayTally> tallies) {
     assign(jobs, config);
     // The injected mid-step fault strikes the second batch with work, after
@@ -671,12 +669,6 @@ class OpenClExecutor final : public RayExecutor {
           },
           tbb::simple_partitioner());
     }
-    Transfers moved;
-    for (const Device& d : devices_) {
-      moved.to_device += d.moved.to_device;
-      moved.from_device += d.moved.from_device;
-    }
-    return moved;
   }
 
   // Device i's jobs' outcomes into their slots, settled, and where their

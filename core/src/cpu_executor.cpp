@@ -113,7 +113,7 @@ class CpuExecutor final : public RayExecutor {
 
   void configure(const Config& config) override { config_ = config; }
 
-  Transfers execute(RayBatch& batch) override {
+  void execute(RayBatch& batch) override {
     const std::span<const RayJob> jobs = batch.jobs;
     const std::span<std::vector<RayOutcome>> outcomes = batch.outcomes;
     const std::span<RayTally> tallies = batch.tallies;
@@ -131,7 +131,7 @@ class CpuExecutor final : public RayExecutor {
         for_each_tracked(jobs[j], params_[j], [&](const rtcd_candidate& c) { trace(jobs[j], params_[j], c, outcomes[j].emplace_back()); });
         tallies[j] = settle_outcomes(outcomes[j], true);
       });
-      return {};  // the rays run where they are
+      return;  // the rays run where they are
     }
     // Full jobs select their candidates in fixed blocks of jobs, each block
     // with its own marks, kept across steps. With enough blocks to keep
@@ -161,7 +161,7 @@ class CpuExecutor final : public RayExecutor {
         }
       }
     });
-    if (at_once) return {};
+    if (at_once) return;
     // Chunks small enough to spread even a one-pair step over the threads;
     // each ray writes its own slot, so the split never changes a result.
     size_t rays = 0;
@@ -178,7 +178,6 @@ class CpuExecutor final : public RayExecutor {
         trace(jobs[chunk.job], params_[chunk.job], candidates_[chunk.job][k], outcomes[chunk.job][k]);
     });
     for (size_t j = 0; j < jobs.size(); ++j) tallies[j] = settle_outcomes(outcomes[j], false);
-    return {};
   }
 
  private:

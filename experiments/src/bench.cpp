@@ -683,12 +683,14 @@ void Bench::write_replay_steps() const {
       const ReplayStep& s = r.steps[i];
       if (!s.ran) continue;
       const sim::RecordedStep& rec = recording.steps()[i];
+      DeviceWork devices;
+      for (const DeviceWork& d : s.devices) devices += d;
       csv << '"' << r.config.label << "\"," << r.engine_name << ',' << r.config.threads << ',' << i << ',' << rec.time
           << ',' << rec.bodies << ',' << s.pairs << ',' << phases.of(i) << ',' << s.seconds << ',' << s.seconds_rays()
           << ',' << s.seconds_prepare << ',' << s.seconds_full << ',' << s.seconds_iterative << ','
           << s.seconds_gather << ',' << s.pairs_full << ',' << s.pairs_iterative << ',' << s.counts.rays() << ','
           << s.colliding << ',' << s.contacts << ',' << s.depth_sum << ',' << s.judged << ',' << s.deep << ','
-          << s.missed << ',' << s.false_rays << ',' << s.bytes_to_device << ',' << s.bytes_from_device << '\n';
+          << s.missed << ',' << s.false_rays << ',' << devices.bytes_to_device << ',' << devices.bytes_from_device << '\n';
     }
 }
 

@@ -84,16 +84,7 @@ class OursRunner final : public Runner {
     out.certificates_granted = s.certificates_granted;
     out.certificates_expired = s.certificates_expired;
     out.counts = s;
-    out.bytes_to_device = s.bytes_to_device;
-    out.bytes_from_device = s.bytes_from_device;
-    out.device_launches = s.device_launches;
-    out.device_writes = s.device_writes;
-    out.device_reads = s.device_reads;
-    out.device_waits = s.device_waits;
-    out.seconds_device_kernels = s.seconds_device_kernels;
-    out.seconds_device_copies = s.seconds_device_copies;
-    out.device_rays.clear();
-    for (const DeviceWork& d : s.devices) out.device_rays.push_back(d.rays);
+    out.devices = s.devices;
     out.cpu_fallback = s.cpu_fallback;
     out.contacts = result_.contacts.size();
     for (const PairResult& p : result_.pairs) out.colliding += p.colliding;

@@ -23,6 +23,12 @@ sim::Scene scene_of(py::handle scene) {
   return sim::load_scene(text_of(scene));
 }
 
+std::vector<size_t> device_rays(const std::vector<DeviceWork>& devices) {
+  std::vector<size_t> rays;
+  for (const DeviceWork& d : devices) rays.push_back(d.rays);
+  return rays;
+}
+
 py::dict record_dict(const sim::StepRecord& r) {
   py::dict d(py::arg("step") = r.step, py::arg("time") = r.time, py::arg("bodies") = r.bodies,
              py::arg("seconds_broad") = r.seconds_broad, py::arg("seconds_narrow") = r.seconds_narrow,
@@ -33,7 +39,7 @@ py::dict record_dict(const sim::StepRecord& r) {
              py::arg("rays_iterative") = r.rays.rays_iterative, py::arg("contacts") = r.contacts,
              py::arg("predictive") = r.predictive, py::arg("solver_points") = r.solver_points,
              py::arg("speculative_points") = r.speculative_points, py::arg("ground_contacts") = r.ground_contacts,
-             py::arg("device_rays") = r.device_rays, py::arg("cpu_fallback") = r.cpu_fallback,
+             py::arg("device_rays") = device_rays(r.devices), py::arg("cpu_fallback") = r.cpu_fallback,
              py::arg("kinetic_energy") = r.kinetic_energy);
   // Set on the steps the interpenetration pass ran, else None.
   auto measured = [&](double v) { return v >= 0 ? py::object(py::float_(v)) : py::none(); };

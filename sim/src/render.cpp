@@ -19,6 +19,7 @@
 #include <tbb/parallel_for.h>
 
 #include "rtcd/error.hpp"
+#include "rtcd/mesh_gen.hpp"
 
 namespace rtcd::sim {
 namespace {
@@ -376,7 +377,35 @@ void draw_line(const RenderLine& line, const CameraFrame& frame, const std::vect
 
 uint8_t to_byte(float value) { return uint8_t(std::lround(std::clamp(value, 0.0f, 1.0f) * 255.0f)); }
 
+RenderMesh render_mesh(const Mesh& m) {
+  RenderMesh r;
+  r.positions.assign(m.positions().begin(), m.positions().end());
+  r.triangles.assign(m.triangles().begin(), m.triangles().end());
+  return r;
+}
+
 }  // namespace
+
+RenderMesh look_of(const Shape& shape) {
+  if (const Mesh* m = shape.mesh()) return render_mesh(*m);
+  if (const auto* sphere = std::get_if<Sphere>(&shape.geometry())) return render_mesh(gen::icosphere(sphere->radius, 3));
+  if (const auto* box = std::get_if<Box>(&shape.geometry())) return render_mesh(gen::box(box->half_extents));
+  throw UsageError("a half-space has no finite look: draw it as a ground_square");
+}
+
+RenderMesh ground_square(const Eigen::Vector3d& centre, double half) {
+  RenderMesh square;
+  for (const auto& [x, y] : {std::pair{-1, -1}, std::pair{1, -1}, std::pair{1, 1}, std::pair{-1, 1}})
+    square.positions.push_back(Eigen::Vector3f(float(centre.x() + x * half), float(centre.y() + y * half), 0.0f));
+  square.triangles = {{0, 1, 2}, {0, 2, 3}};
+  return square;
+}
+
+Eigen::Vector3f kind_colour(size_t kind) {
+  static const Eigen::Vector3f colours[] = {{0.85f, 0.55f, 0.25f}, {0.35f, 0.6f, 0.85f}, {0.5f, 0.75f, 0.4f},
+                                            {0.8f, 0.45f, 0.6f},  {0.7f, 0.7f, 0.35f},  {0.55f, 0.5f, 0.8f}};
+  return colours[kind % std::size(colours)];
+}
 
 Camera frame_camera(const Aabb& box) {
   Aabb framed = box;

@@ -117,19 +117,6 @@ Eigen::Quaterniond random_orientation(std::mt19937_64& rng) {
   return Eigen::Quaterniond(b * std::cos(u3), a * std::sin(u2), a * std::cos(u2), b * std::sin(u3)).normalized();
 }
 
-RenderMesh render_mesh(const Mesh& m) {
-  RenderMesh r;
-  r.positions.assign(m.positions().begin(), m.positions().end());
-  for (const auto& t : m.triangles()) r.triangles.push_back({t[0], t[1], t[2]});
-  return r;
-}
-
-Eigen::Vector3f palette(size_t i) {
-  static const Eigen::Vector3f colours[] = {{0.85f, 0.55f, 0.25f}, {0.35f, 0.6f, 0.85f}, {0.5f, 0.75f, 0.4f},
-                                            {0.8f, 0.45f, 0.6f},  {0.7f, 0.7f, 0.35f},  {0.55f, 0.5f, 0.8f}};
-  return colours[i % std::size(colours)];
-}
-
 // Bullet's own shape for a kind, in its principal frame.
 void make_gimpact_shape(Kind& k) {
   const Pose to_principal = k.principal.inverse();
@@ -154,13 +141,6 @@ void make_gimpact_shape(Kind& k) {
   auto compound = std::make_unique<btCompoundShape>(false);
   compound->addChildShape(bt(to_principal), k.gimpact_child.get());
   k.gimpact_shape = std::move(compound);
-}
-
-// What snapshots draw for a kind: its mesh, or its primitive tessellated.
-RenderMesh kind_render_mesh(const Shape& shape, const BodySpec& spec) {
-  if (const Mesh* m = shape.mesh()) return render_mesh(*m);
-  if (spec.sphere) return render_mesh(gen::icosphere(*spec.sphere, 3));
-  return render_mesh(gen::box(*spec.box));
 }
 
 // The shape's bounds seen from its principal frame.
@@ -353,7 +333,7 @@ void Simulation::Impl::make_kinds() {
     // Two bodies within the extension overlap; a derived one is at least
     // the smaller body's resting extension, which the smaller box's growth covers.
     const double grow = 0.5 * scene.narrow.distance_extension.value_or(resting_extension(k.shape->radius()));
-    k.render = kind_render_mesh(*k.shape, spec);
+    k.render = look_of(*k.shape);
     if (!spec.is_static) {
       k.mass = spec.mass ? mass_properties_for_mass(*k.shape, *spec.mass) : mass_properties(*k.shape, *spec.density);
       k.principal = k.mass.principal_frame();
@@ -581,8 +561,7 @@ void Simulation::Impl::count_batch(StepRecord& r) {
   r.pairs_full = n.stats.pairs_full;
   r.pairs_iterative = n.stats.pairs_iterative;
   r.rays = n.stats;
-  r.device_rays.clear();
-  for (const DeviceWork& d : n.stats.devices) r.device_rays.push_back(d.rays);
+  r.devices = n.stats.devices;
   r.cpu_fallback = n.stats.cpu_fallback;
   r.contacts = n.contacts.size();
   r.predictive = n.predictive.size();
@@ -778,7 +757,7 @@ Image Simulation::snapshot(int width, int height, bool full_rays) {
   std::vector<RenderInstance> instances;
   Aabb box;
   for (const BodyState& s : bodies()) {
-    instances.push_back({uint32_t(s.spec), s.pose, s.is_static ? Eigen::Vector3f(0.6f, 0.6f, 0.65f) : palette(s.spec)});
+    instances.push_back({uint32_t(s.spec), s.pose, s.is_static ? kStaticColour : kind_colour(s.spec)});
     box.extend(s.pose.apply(m.kinds[s.spec].shape->bounds().min));
     box.extend(s.pose.apply(m.kinds[s.spec].shape->bounds().max));
   }
@@ -786,16 +765,12 @@ Image Simulation::snapshot(int width, int height, bool full_rays) {
   if (m.scene.ground.present) {
     // The ground drawn as a square around the bodies, in the plane.
     const double half = 0.75 * (box.max - box.min).norm() + 1.0;
-    RenderMesh quad;
-    quad.positions = {{float(-half), float(-half), 0}, {float(half), float(-half), 0}, {float(half), float(half), 0},
-                      {float(-half), float(half), 0}};
-    quad.triangles = {{0, 1, 2}, {0, 2, 3}};
-    meshes.push_back(quad);
+    meshes.push_back(ground_square(Eigen::Vector3d::Zero(), half));
     Pose ground;
     ground.orientation = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitZ(), m.scene.ground.normal);
     const Eigen::Vector3d centre = 0.5 * (box.min + box.max);
     ground.position = centre - m.scene.ground.normal * (m.scene.ground.normal.dot(centre) - m.scene.ground.height);
-    instances.push_back({uint32_t(meshes.size() - 1), ground, Eigen::Vector3f(0.82f, 0.82f, 0.78f)});
+    instances.push_back({uint32_t(meshes.size() - 1), ground, kGroundColour});
   }
   const std::vector<RenderLine> lines = contact_lines(last_narrow_phase().contacts, full_rays);
   Camera camera = frame_camera(box);

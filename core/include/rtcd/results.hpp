@@ -172,6 +172,21 @@ struct DeviceWork {
   // kernel keeping the tracked rays, enqueued after the last read) is
   // counted in the step in which it is seen finished.
   double seconds_kernels = 0, seconds_copies = 0;
+
+  // Summed field by field: the work of several devices or steps.
+  DeviceWork& operator+=(const DeviceWork& o) {
+    jobs += o.jobs;
+    rays += o.rays;
+    launches += o.launches;
+    writes += o.writes;
+    reads += o.reads;
+    waits += o.waits;
+    bytes_to_device += o.bytes_to_device;
+    bytes_from_device += o.bytes_from_device;
+    seconds_kernels += o.seconds_kernels;
+    seconds_copies += o.seconds_copies;
+    return *this;
+  }
 };
 
 // The step's counters beside the ray counters: kStepCounters says what each counts.

@@ -67,11 +67,6 @@ struct RayJob {
   Residence* residence = nullptr;
 };
 
-// Bytes an executor moved between the host and where its rays run.
-struct Transfers {
-  size_t to_device = 0, from_device = 0;
-};
-
 // A job's rays summed up: its records (contacts, predictive rays) and its
 // share of the step's statistics.
 struct RayTally : RayCounts {
@@ -164,10 +159,11 @@ class RayExecutor {
   // `triangle` is where the next walk starts). batch.outcomes[j] and
   // batch.tallies[j] receive what settle_outcomes makes of them; the
   // executor only clears and fills them.
-  virtual Transfers execute(RayBatch& batch) = 0;
-  // After the step's batches: where its rays ran (StepStats::devices,
-  // ::cpu_fallback), so a host or a test can tell a device's work from a
-  // fallback's. The CPU executors have nothing to add.
+  virtual void execute(RayBatch& batch) = 0;
+  // After the step's batches: where its rays ran and what moving them took
+  // (StepStats::devices, their sums, ::cpu_fallback), so a host or a test
+  // can tell a device's work from a fallback's. The CPU executors have
+  // nothing to add.
   virtual void account(StepStats& /*stats*/) const {}
 };
 

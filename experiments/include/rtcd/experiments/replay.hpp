@@ -57,12 +57,7 @@ struct ReplayStep {
   // Ours: a digest of every contact's bodies, kind, vertex or edge and face,
   // in order (FNV-1a): equal digests, the same contacts.
   uint64_t contact_digest = 0;
-  size_t bytes_to_device = 0, bytes_from_device = 0;  // ours on OpenCL: the step's host <-> device traffic
-  // Ours on OpenCL: the step's commands and waits over the devices, and
-  // their device time (StepStats).
-  size_t device_launches = 0, device_writes = 0, device_reads = 0, device_waits = 0;
-  double seconds_device_kernels = 0, seconds_device_copies = 0;
-  std::vector<size_t> device_rays;  // ours on OpenCL: the rays each device ran (StepStats::devices)
+  std::vector<DeviceWork> devices;  // ours on OpenCL: what each device did (StepStats::devices)
   std::string cpu_fallback;         // ours on OpenCL: why the step ran on the CPU instead; empty: it did not
   // Judged steps (ours): ray origins the exact reference puts deeper than
   // epsilon inside the other body, and of those the ones with no contact;

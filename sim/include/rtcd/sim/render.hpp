@@ -13,6 +13,7 @@
 
 #include "rtcd/geometry.hpp"
 #include "rtcd/results.hpp"
+#include "rtcd/shape.hpp"
 
 namespace rtcd::sim {
 
@@ -22,6 +23,21 @@ struct RenderMesh {
   std::vector<Eigen::Vector3f> positions;
   std::vector<std::array<uint32_t, 3>> triangles;
 };
+
+// What a body looks like in its own frame: its mesh, or its sphere or box
+// tessellated. Throws UsageError for a half-space, which has no finite look
+// (see ground_square).
+RenderMesh look_of(const Shape& shape);
+
+// The ground drawn as a square of half side `half` around `centre`, in the
+// plane z = 0 of the ground's frame.
+RenderMesh ground_square(const Eigen::Vector3d& centre, double half);
+
+// The colours every view of a scene gives its bodies: kind `kind` (cycling
+// through six), static bodies and the ground.
+Eigen::Vector3f kind_colour(size_t kind);
+inline const Eigen::Vector3f kStaticColour{0.6f, 0.6f, 0.65f};
+inline const Eigen::Vector3f kGroundColour{0.82f, 0.82f, 0.78f};
 
 // One placed copy of meshes[mesh].
 struct RenderInstance {

@@ -44,7 +44,7 @@ struct StepRecord {
   RayCounts rays;  // the narrow phase's, as it counted them (zero under GIMPACT)
   size_t contacts = 0, predictive = 0, solver_points = 0, speculative_points = 0;
   size_t ground_contacts = 0;  // contacts between a body and the ground
-  std::vector<size_t> device_rays;  // the rays each device of the backend ran (empty on the CPU backends)
+  std::vector<DeviceWork> devices;  // what each device of the backend did (empty on the CPU backends)
   std::string cpu_fallback;         // why the step's rays ran on the CPU instead of the devices; empty: they did not
   double kinetic_energy = 0;
   // Set on the steps the interpenetration pass ran (else negative).
