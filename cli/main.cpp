@@ -178,6 +178,7 @@ int main(int argc, char** argv) {
                 "Snapshots draw each contact ray at its whole depth (default: the solver's segment, projected depth "
                 "along the normal)");
   run->add_option("--record", r.record, "Also write the run's recording here, for rtcd replay and rtcd bench --replay");
+  run->add_flag("--view", r.view, "Also record the run and write its page into view/ (rtcd view)");
 
   rtcd::experiments::BenchOptions bo;
   bool bench_no_plots = false;
@@ -214,9 +215,18 @@ int main(int argc, char** argv) {
   rtcd::cli::add_knobs(*replay, ro.knobs);
 
   rtcd::app::ViewOptions vo;
-  auto* view = app.add_subcommand("view", "A recording to watch: one glTF 2.0 binary (meshes, a node per body, a keyframe per step)");
-  view->add_option("RECORDING", vo.recording, "recording.rtcdrec (rtcd run --record, rtcd bench)")->required();
-  view->add_option("--gltf", vo.gltf, "The .glb to write (Blender and any glTF viewer open it)")->required();
+  auto* view = app.add_subcommand(
+      "view", "A recording to watch: a page that opens from file:// (bodies, contacts, a timeline), or one glTF 2.0 binary");
+  view->add_option("RECORDING", vo.input, "recording.rtcdrec (rtcd run --record, rtcd bench), or a run folder holding one (rtcd run --view)")
+      ->required();
+  view->add_option("--out", vo.out, "The page's folder (default: view/ beside the recording)");
+  view->add_option("--gltf", vo.gltf, "Write this .glb instead of a page (Blender and any glTF viewer open it)");
+  bool view_serve = false;
+  int view_port = 8000;
+  view->add_flag("--serve", view_serve, "Then serve the page on 127.0.0.1 until stopped (for large runs)");
+  view->add_option("--port", view_port, "The port --serve listens on (default: 8000)")->check(CLI::Range(1, 65535));
+  view->add_flag("!--no-contacts", vo.contacts, "Leave the contacts out (no replay of the recording)");
+  view->add_option("--backend", vo.backend, "The narrow phase the contacts are replayed through (default: embree)");
 
   try {
     app.parse(argc, argv);
@@ -236,7 +246,10 @@ int main(int argc, char** argv) {
     }
     if (*check) return rtcd::app::run_check(c);
     if (*replay) return rtcd::app::run_replay(ro);
-    if (*view) return rtcd::app::run_view(vo);
+    if (*view) {
+      if (view_serve) vo.serve = view_port;
+      return rtcd::app::run_view(vo);
+    }
     if (*validate) {
       if (sweep && v.sweep_csv.empty()) v.sweep_csv = "-";
       if (!sweep && !v.sweep_csv.empty()) throw rtcd::UsageError("--csv needs --sweep");

@@ -22,6 +22,7 @@
 
 #include "device_share.hpp"
 #include "rtcd/app/console.hpp"
+#include "rtcd/app/view.hpp"
 #include "rtcd/clock.hpp"
 #include "rtcd/knobs_json.hpp"
 #include "rtcd/sim/recording.hpp"
@@ -91,11 +92,12 @@ int run_scene(const RunOptions& o, fs::path* folder) {
 
   sim::Simulation simulation(scene, o.backend, o.threads);
   std::optional<sim::RecordingWriter> recording;
-  if (!o.record.empty()) {
+  const std::string record = o.record.empty() && o.view ? (dir / "recording.rtcdrec").string() : o.record;
+  if (!record.empty()) {
     std::ifstream in(scene_path);
     std::ostringstream text;
     text << in.rdbuf();
-    recording.emplace(o.record, scene_path, text.str());
+    recording.emplace(record, scene_path, text.str());
   }
   for (const std::string& w : simulation.warnings()) std::cerr << "rtcd: warning: " << w << '\n';
   std::cout << "scene " << scene.name << ": " << scene.body_count() << " bodies, " << scene.steps << " steps of "
@@ -232,6 +234,11 @@ int run_scene(const RunOptions& o, fs::path* folder) {
       if (fs::exists(dir / name)) plots.push_back((dir / name).string());
   }
   summary["plots"] = plots;
+  if (o.view && done > 0) {
+    const fs::path page = dir / "view";
+    const size_t bytes = write_view_page(sim::Recording::read(record), page, true, "embree");
+    summary["view"] = {{"index", (page / "index.html").string()}, {"bytes", bytes}};
+  }
   std::ofstream(dir / "summary.json") << summary.dump(2) << '\n';
 
   const auto row = [&](const char* stage, double seconds) {

@@ -309,6 +309,7 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
     const Judge judging{frame, body_shape, exact, options.epsilon_scale};
     std::optional<Verdict> verdict;
     if (judge) verdict = judge_exact(judging);
+    bool observed = false;
     for (size_t i = 0; i < runners.size(); ++i) {
       if (step % configs[i].every != 0 || runs[i].stopped()) continue;
       if (configs[i].budget_seconds > 0 && spent[i] > configs[i].budget_seconds) {
@@ -321,6 +322,10 @@ std::vector<ReplayRun> replay(const sim::Recording& recording, const std::vector
       runners[i]->run(frame, out);
       spent[i] += out.seconds;
       if (verdict && runners[i]->result()) count_judged(judging, *verdict, *runners[i]->result(), out);
+      if (options.observe && runners[i]->result() && !observed) {
+        options.observe(step, *runners[i]->result());
+        observed = true;
+      }
     }
     if (options.progress) options.progress(step + 1, total);
   }

@@ -312,7 +312,7 @@ TEST_F(CliFiles, ViewWritesARecordingAsGltf) {
   for (const auto& [args, fragment, file] : std::vector<std::tuple<std::string, std::string, std::string>>{
            {"view " + junk + " --gltf " + (dir_ / "junk.glb").string(), "junk.rtcdrec", (dir_ / "junk.glb").string()},
            {"view " + recording + " --gltf " + nowhere, "no_such_folder", nowhere},
-           {"view " + recording, "--gltf", ""}}) {
+           {"view " + (dir_ / "run").string(), "recording.rtcdrec", (dir_ / "run" / "view").string()}}) {
     const Outcome r = run(args);
     EXPECT_EQ(r.code, 2) << args << ": " << r.out;
     EXPECT_NE(r.out.find(fragment), std::string::npos) << args << ": " << r.out;
@@ -320,6 +320,61 @@ TEST_F(CliFiles, ViewWritesARecordingAsGltf) {
       EXPECT_FALSE(std::filesystem::exists(file)) << file;
     }
   }
+}
+
+// `rtcd run --view` records the run and writes its page; `rtcd view
+// RUN_DIR` writes it again elsewhere. The page's data: every body posed at
+// every step, the kinds' looks once, the replayed contacts. A folder that
+// is not a page is never replaced.
+TEST_F(CliFiles, ViewWritesARunsPage) {
+  const std::filesystem::path run_dir = dir_ / "run";
+  const Outcome ran = run("run " + std::string(RTCD_DATA_DIR) + "/scenes/stack.json --steps 20 --no-plots --view --out " +
+                          run_dir.string());
+  ASSERT_EQ(ran.code, 0) << ran.out;
+  ASSERT_TRUE(std::filesystem::exists(run_dir / "recording.rtcdrec"));
+  const auto data = [](const std::filesystem::path& page, const std::string& script) {
+    std::ifstream in(page / "data" / script);
+    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const size_t eq = text.find(" = ");
+    EXPECT_NE(eq, std::string::npos) << script;
+    return nlohmann::json::parse(text.substr(eq + 3, text.rfind(';') - eq - 3));
+  };
+  for (const std::filesystem::path& page : {run_dir / "view", dir_ / "again"}) {
+    if (page != run_dir / "view") {
+      const Outcome again = run("view " + run_dir.string() + " --out " + page.string());
+      ASSERT_EQ(again.code, 0) << again.out;
+      EXPECT_NE(again.out.find("open file://"), std::string::npos) << again.out;
+    }
+    SCOPED_TRACE(page.string());
+    for (const char* file : {"index.html", "viewer.js", "three.min.js", "OrbitControls.js", "data/scene.js",
+                             "data/poses.js", "data/contacts.js"})
+      EXPECT_GT(std::filesystem::file_size(page / file), 100u) << file;
+    const auto scene = data(page, "scene.js");
+    EXPECT_EQ(scene["steps"], 20);
+    EXPECT_EQ(scene["body_look"].size(), 13u);
+    EXPECT_EQ(scene["looks"].size(), 6u);  // five kinds and the ground
+    EXPECT_EQ(scene["figures"]["pairs"].size(), 20u);
+    // 7 floats a body and step, base64 in lines of 72 characters.
+    std::string poses = data(page, "poses.js").get<std::string>();
+    std::erase(poses, '\n');
+    EXPECT_EQ(poses.size(), (20 * 13 * 7 * 4 + 2) / 3 * 4);
+    const auto contacts = data(page, "contacts.js");
+    ASSERT_TRUE(contacts.is_object());
+    std::string depths = contacts["depths"].get<std::string>();
+    std::erase(depths, '\n');
+    EXPECT_GT(depths.size(), 100u) << "the blobs touch";
+  }
+  // Not a page: left as it was.
+  std::filesystem::create_directories(dir_ / "mine");
+  write("mine/notes.txt", "mine");
+  const Outcome refused = run("view " + run_dir.string() + " --out " + (dir_ / "mine").string());
+  EXPECT_EQ(refused.code, 2) << refused.out;
+  EXPECT_NE(refused.out.find("is not a page"), std::string::npos) << refused.out;
+  EXPECT_TRUE(std::filesystem::exists(dir_ / "mine" / "notes.txt"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "mine" / "index.html"));
+  const Outcome missing = run("view " + (dir_ / "nothing_here").string());
+  EXPECT_EQ(missing.code, 2) << missing.out;
+  EXPECT_NE(missing.out.find("nothing_here"), std::string::npos) << missing.out;
 }
 
 // The first second of the small stream through the whole bench, then its

@@ -16,6 +16,9 @@ struct RunOptions {
   int threads = 0;  // 0: all
   std::string out;  // empty: runs/<scene>-<timestamp>/
   std::string record;  // not empty: the recording `rtcd replay` and `rtcd bench --replay` read
+  // Also record the run (to `record`, else recording.rtcdrec in the run
+  // folder) and write its page into view/ (rtcd view).
+  bool view = false;
   bool no_plots = false;
   bool full_rays = false;  // snapshots draw whole rays, not the solver's segments
 };

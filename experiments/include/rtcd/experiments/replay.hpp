@@ -83,6 +83,9 @@ struct ReplayOptions {
   double epsilon_scale = 1e-5;  // no claim on origins this close (times the larger radius) to the surface
   // Called after each step with (steps done, steps in all).
   std::function<void(uint64_t, uint64_t)> progress;
+  // Called after each step with the result of the first configuration of
+  // ours that ran it (its contacts, pairs and counters).
+  std::function<void(uint64_t, const StepResult&)> observe;
 };
 
 // Throws UsageError for a configuration that cannot be replayed (a stateful
