@@ -34,7 +34,7 @@ RESULTS = os.path.join("docs", "results")
 # The folders, in the order docs/results/README.md lists them.
 FOLDERS = ["run", "avalanche", "stream", "stream-end", "validation", "truth", "zoo", "piles", "opencl", "gpu", "threshold-sweep",
            "accuracy-sweep",
-           "edges", "python", "campaign", "judged", "floors"]
+           "edges", "python", "campaign", "judged", "floors", "view"]
 META_KEYS = ("experiment", "command", "machine", "date", "commit", "note")
 
 
@@ -459,6 +459,17 @@ def python_rows():
                 "python", source, [m])]
 
 
+def view_rows():
+    m = meta("view")
+    page = read_json("view", "page.json")
+    for key in ("folder_bytes", "first_frame_ms"):
+        if key not in page:
+            raise ResultError(f"{RESULTS}/view/page.json: no {key}")
+    return [Row("the default scene's page (`rtcd run --view`): folder size (goal ≤ 32 MB); first frame in headless "
+                "Chromium, software WebGL", f"{page['folder_bytes'] / 1e6:.1f} MB; {page['first_frame_ms']:.0f} ms",
+                "view", "view/page.json", [m])]
+
+
 def campaign_rows():
     m = meta("campaign")
     source = "campaign/times.json"
@@ -498,7 +509,8 @@ def judged_rows():
 
 def all_rows():
     return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + truth_rows()
-            + zoo_rows() + piles_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows() + judged_rows())
+            + zoo_rows() + piles_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows() + judged_rows()
+            + view_rows())
 
 
 # ---------------------------------------------------------------- blocks
