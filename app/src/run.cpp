@@ -52,7 +52,7 @@ constexpr const char* kCsvHeader =
     "step,time,bodies,seconds_broad,seconds_narrow,seconds_solver,seconds_effects,seconds_total,pairs,pairs_full,"
     "pairs_iterative,rays_full,rays_predictive,rays_iterative,contacts,predictive,solver_points,speculative_points,"
     "kinetic_energy,interpenetration,projected_interpenetration,deepest,true_penetration,deepest_true,deep_pairs,"
-    "longest_deep_run";
+    "longest_deep_run,ground_depth_fraction";
 
 void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
   out << r.step << ',' << r.time << ',' << r.bodies << ',' << r.seconds_broad << ',' << r.seconds_narrow << ','
@@ -62,8 +62,8 @@ void write_csv_row(std::ostream& out, const sim::StepRecord& r) {
       << r.speculative_points << ',' << r.kinetic_energy << ',';
   if (r.interpenetration >= 0)
     out << r.interpenetration << ',' << r.projected << ',' << r.deepest << ',' << r.true_penetration << ','
-        << r.deepest_true << ',' << r.deep_pairs << ',' << r.longest_deep_run;
-  else out << ",,,,,,";
+        << r.deepest_true << ',' << r.deep_pairs << ',' << r.longest_deep_run << ',' << r.ground_depth_fraction;
+  else out << ",,,,,,,";
   out << '\n';
 }
 

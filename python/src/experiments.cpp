@@ -48,6 +48,7 @@ py::dict record_dict(const sim::StepRecord& r) {
   d["deepest"] = measured(r.deepest);
   d["true_penetration"] = measured(r.true_penetration);
   d["deepest_true"] = measured(r.deepest_true);
+  d["ground_depth_fraction"] = measured(r.ground_depth_fraction);
   d["interpenetration_pairs"] = r.interpenetration_pairs;
   d["deep_pairs"] = r.deep_pairs;
   d["longest_deep_run"] = r.longest_deep_run;

@@ -186,19 +186,43 @@ void BatchDispatcher::dispatchAllCollisionPairs(btOverlappingPairCache* pairs, c
   batch_.seconds_manifolds = seconds_since(t0) - batch_.seconds_narrow;
 }
 
+// The way a moves out of b: the pair's pushes summed (b's turned), unit; zero without any.
+Eigen::Vector3d BatchDispatcher::way_out(const PairResult& pair) const {
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  for (const Contact& c : result_.contacts_of(pair)) sum += c.source == Side::a ? c.push : Eigen::Vector3d(-c.push);
+  const double n = sum.norm();
+  return n > 0 ? Eigen::Vector3d(sum / n) : Eigen::Vector3d::Zero();
+}
+
 void BatchDispatcher::fill(const PairResult& pair, btCollisionObject* a, btCollisionObject* b, PairManifolds& held) {
   touching_.clear();
   gaps_.clear();
+  // Shallow, the pair learns the way its bodies met; deeper, pushes against it turn.
+  Eigen::Vector3d entry = Eigen::Vector3d::Zero();
+  if (options_.keep_entry_direction) {
+    const Eigen::Matrix3d b_frame = shape_pose(b).orientation.toRotationMatrix();
+    const double thinner = std::min(slot_of(a)->link.thickness, slot_of(b)->link.thickness);
+    if (pair.max_depth <= 0.25 * thinner) {
+      if (const Eigen::Vector3d way = way_out(pair); way.squaredNorm() > 0) held.entry_in_b = b_frame.transpose() * way;
+    } else {
+      entry = b_frame * held.entry_in_b;
+    }
+  }
   for (const Contact& c : result_.contacts_of(pair)) {
     const double depth = c.push.norm();
     if (!(depth > 0)) continue;
-    const Eigen::Vector3d out = c.push / depth;  // moves the source vertex out of the target
+    Eigen::Vector3d out = c.push / depth;  // moves the source vertex out of the target
+    const Eigen::Vector3d way = c.source == Side::a ? entry : Eigen::Vector3d(-entry);
+    if (out.dot(way) < 0) {
+      out = way;
+      ++batch_.entry_pushes;
+    }
     const int i0 = c.kind == ContactKind::sphere ? -2 : int(c.edge[0]);
     const int i1 = c.kind == ContactKind::vertex ? -1 : c.kind == ContactKind::edge ? int(c.edge[1]) : -2;
     if (c.source == Side::a)
-      touching_.push_back({c.origin, c.origin + c.push, out, -depth, 0, i0, i1});
+      touching_.push_back({c.origin, c.origin + depth * out, out, -depth, 0, i0, i1});
     else
-      touching_.push_back({c.origin + c.push, c.origin, -out, -depth, 1, i0, i1});
+      touching_.push_back({c.origin + depth * out, c.origin, -out, -depth, 1, i0, i1});
   }
   if (options_.speculative) {
     for (const PredictiveRay& r : result_.predictive_of(pair)) {

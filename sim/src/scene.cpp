@@ -339,6 +339,10 @@ Scene parse_scene(std::string_view json_text, const std::string& path, const Sce
 
   Object solver = root.object("solver");
   s.solver_iterations = uint32_t(solver.integer("iterations", s.solver_iterations, 1, 1000));
+  s.solver_substeps = uint32_t(solver.integer("substeps", s.solver_substeps, 1, 64));
+  s.solver_erp2 = solver.number("erp2", s.solver_erp2, 0.01, 1.0);
+  if (s.time_step / s.solver_substeps < kMinTimeStep)
+    solver.fail(solver.key("substeps"), "makes sub-steps shorter than " + std::to_string(kMinTimeStep) + " s (time_step / substeps)");
   solver.finish();
 
   Object ip = root.object("interpenetration");

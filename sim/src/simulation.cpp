@@ -87,6 +87,7 @@ struct Kind {
   ShapeId id = 0, probe_id = 0;
   MassProperties mass;                  // dynamic kinds only
   Pose principal;                       // principal frame in the shape frame (identity when static)
+  double thickness = 0;                 // the thinnest extent of its bounds in the principal frame
   std::unique_ptr<btBoxShape> bounds;   // the broad phase's box, in the principal frame
   std::unique_ptr<btCompoundShape> collision;
   // Bullet's own narrow phase (kGimpact): the mesh in the principal frame,
@@ -315,6 +316,7 @@ void Simulation::Impl::make_world() {
   // keep their energy.
   world->getSolverInfo().m_splitImpulse = true;
   world->getSolverInfo().m_splitImpulsePenetrationThreshold = 0;
+  world->getSolverInfo().m_erp2 = btScalar(scene.solver_erp2);
 }
 
 Simulation::Impl::~Impl() {
@@ -338,7 +340,9 @@ void Simulation::Impl::make_kinds() {
       k.mass = spec.mass ? mass_properties_for_mass(*k.shape, *spec.mass) : mass_properties(*k.shape, *spec.density);
       k.principal = k.mass.principal_frame();
     }
-    make_broad_phase_box(k, principal_bounds(*k.shape, k.principal).grown(grow));
+    const Aabb local = principal_bounds(*k.shape, k.principal);
+    k.thickness = (local.max - local.min).minCoeff();
+    make_broad_phase_box(k, local.grown(grow));
     if (gimpact) make_gimpact_shape(k);
     if (narrow) k.id = narrow->add_shape(k.shape);
     if (probe) k.probe_id = probe->add_shape(k.shape);
@@ -402,7 +406,7 @@ void Simulation::Impl::add_body(size_t spec_index, const Pose& shape_pose, const
     if (!scene.sleeping) b.rigid->setActivationState(DISABLE_DEACTIVATION);
   }
   world->addRigidBody(b.rigid.get());
-  if (batch) batch->link(b.rigid.get(), {b.id, k.principal.inverse(), spec.friction, spec.restitution});
+  if (batch) batch->link(b.rigid.get(), {b.id, k.principal.inverse(), spec.friction, spec.restitution, k.thickness});
   bodies.push_back(std::move(b));
 }
 
@@ -493,7 +497,8 @@ void Simulation::Impl::pose_probes() {
 }
 
 // Pairs held deep: deeper than 2% of a pair's size, its smaller body's
-// diameter (the ground has none), and for how many passes in a row.
+// diameter (the ground has none), and for how many passes in a row; and
+// the deepest body in the ground, over its size.
 void Simulation::Impl::track_deep_pairs(const StepResult& truth_step) {
   const auto size = [&](BodyId id) {
     const Body& b = bodies[id];
@@ -502,7 +507,11 @@ void Simulation::Impl::track_deep_pairs(const StepResult& truth_step) {
   deep_runs_next.clear();
   uint32_t longest = 0;
   BodyPair held{};
+  record.ground_depth_fraction = 0;
   for (const PairResult& p : truth_step.pairs) {
+    const double smaller = std::min(size(p.pair.a), size(p.pair.b)), larger = std::max(size(p.pair.a), size(p.pair.b));
+    if (std::isinf(larger) && p.max_depth > 0)
+      record.ground_depth_fraction = std::max(record.ground_depth_fraction, p.max_depth / smaller);
     if (!(p.max_depth > 0.02 * std::min(size(p.pair.a), size(p.pair.b)))) continue;
     const uint64_t key = pair_key(p.pair.a, p.pair.b);
     const auto before = deep_runs.find(key);
@@ -557,6 +566,7 @@ void Simulation::Impl::count_batch(StepRecord& r) {
   counters.friction_points += last.friction_points;
   counters.restitution_points += last.restitution_points;
   counters.speculative_points += last.speculative_points;
+  counters.entry_pushes += last.entry_pushes;
   r.pairs = last.pairs;
   r.pairs_full = n.stats.pairs_full;
   r.pairs_iterative = n.stats.pairs_iterative;
@@ -616,9 +626,12 @@ const StepRecord& Simulation::step() {
   effects += seconds_since(t);
 
   m.world->broad = m.world->narrow = m.world->solver = 0;
-  // One variable step of the scene's length; below kMinTimeStep Bullet would take none.
+  // One variable step of the scene's length (below kMinTimeStep Bullet
+  // would take none), or that many fixed sub-steps of it.
   static_assert(kMinTimeStep > SIMD_EPSILON);
-  m.world->stepSimulation(btScalar(m.scene.time_step), 0, btScalar(m.scene.time_step));
+  const uint32_t substeps = m.scene.solver_substeps;
+  if (substeps == 1) m.world->stepSimulation(btScalar(m.scene.time_step), 0, btScalar(m.scene.time_step));
+  else m.world->stepSimulation(btScalar(m.scene.time_step), int(substeps), btScalar(m.scene.time_step / substeps));
   m.check_poses(index);
   ++m.counters.steps;
 

@@ -4,6 +4,7 @@
 // Bullet's own algorithms, so a host can mix both in one world.
 #pragma once
 
+#include <limits>
 #include <cstdint>
 #include <span>
 #include <unordered_map>
@@ -28,6 +29,13 @@ struct DispatcherOptions {
   // Without these, points carry zero friction or restitution.
   bool friction = true;
   bool restitution = true;
+  // A pair remembers the way its bodies met (their contacts' pushes while
+  // the pair is shallower than a quarter of its thinner body's thickness);
+  // deeper, a contact whose push turns against that way (the nearest
+  // surface on the far side of a thin body pressed past its middle) pushes
+  // the remembered way instead, by the same depth. Off: every push as the
+  // narrow phase measured it.
+  bool keep_entry_direction = true;
 };
 
 // What the dispatcher needs to know of a linked body.
@@ -35,6 +43,7 @@ struct BodyLink {
   BodyId id = 0;
   Pose shape_in_body;  // the shape's frame in the Bullet body's frame (its principal frame)
   double friction = 0.5, restitution = 0.0;
+  double thickness = std::numeric_limits<double>::infinity();  // its thinnest extent (the ground: none)
 };
 
 class BatchDispatcher : public btCollisionDispatcher {
@@ -62,6 +71,7 @@ class BatchDispatcher : public btCollisionDispatcher {
     // points with a friction coefficient, touching points with restitution,
     // speculative points (a gap, from predictive rays).
     size_t friction_points = 0, restitution_points = 0, speculative_points = 0;
+    size_t entry_pushes = 0;  // contacts that pushed the pair's entry way instead (keep_entry_direction)
     double seconds_narrow = 0, seconds_manifolds = 0;
   };
   const Batch& last_batch() const { return batch_; }
@@ -86,6 +96,9 @@ class BatchDispatcher : public btCollisionDispatcher {
   struct PairManifolds {
     std::vector<btPersistentManifold*> manifolds;
     uint64_t seen = 0;  // the batch that last saw this pair
+    // The way a moved out of b when the pair was last shallow, in b's shape
+    // frame; zero: not known (DispatcherOptions::keep_entry_direction).
+    Eigen::Vector3d entry_in_b = Eigen::Vector3d::Zero();
   };
   Slot* slot_of(const btCollisionObject* object);
   const Slot* slot_of(const btCollisionObject* object) const;
@@ -94,6 +107,7 @@ class BatchDispatcher : public btCollisionDispatcher {
   void choose_spread(std::span<const Candidate> candidates, size_t offset, size_t budget, std::vector<size_t>& chosen);
   // Moves the gaps that close within the step to the front; returns how many.
   size_t closing_first(const btCollisionObject* a, const btCollisionObject* b);
+  Eigen::Vector3d way_out(const PairResult& pair) const;
   void fill(const PairResult& pair, btCollisionObject* a, btCollisionObject* b, PairManifolds& held);
   void release(PairManifolds& held);
 

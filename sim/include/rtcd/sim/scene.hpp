@@ -110,6 +110,13 @@ struct Scene {
   Config narrow;                  // predictive and projected come from `effects`
   uint32_t points_per_pair = 8;   // contact points handed to the solver per pair
   uint32_t solver_iterations = 10;
+  // Bullet steps each step in this many equal sub-steps, the narrow phase
+  // and the solver once in each: a pile's weight is answered in smaller
+  // slices of motion.
+  uint32_t solver_substeps = 1;
+  // The share of a contact's penetration the solver's split impulse
+  // removes in a (sub-)step (Bullet's erp2, its default 0.2).
+  double solver_erp2 = 0.2;
 
   uint32_t interpenetration_every = 10;
   std::vector<int64_t> snapshot_steps{-1};  // negative counts from the end (-1: the last step)

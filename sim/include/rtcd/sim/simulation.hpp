@@ -30,6 +30,7 @@ struct StageCounters {
   uint64_t friction_points = 0;       // points handed to the solver with a friction coefficient > 0
   uint64_t restitution_points = 0;    // touching points handed to the solver with restitution > 0
   uint64_t speculative_points = 0;    // points handed to the solver with a gap (from predictive rays)
+  uint64_t entry_pushes = 0;          // contacts that pushed their pair's entry way (DispatcherOptions::keep_entry_direction)
   uint64_t interpenetration_passes = 0;
   uint64_t snapshots = 0;
 };
@@ -61,6 +62,9 @@ struct StepRecord {
   size_t deep_pairs = 0;
   uint64_t longest_deep_run = 0;
   BodyPair longest_deep_pair;  // the pair held so, numbered as Simulation::bodies() (kGround: the ground)
+  // The deepest body in the ground: its true penetration over its size
+  // (0 with no ground contact; negative where the pass did not run).
+  double ground_depth_fraction = -1;
   size_t interpenetration_pairs = 0;
 };
 
