@@ -343,7 +343,27 @@ def zoo_rows():
             Row(f"zoo scene from {z['from_time']} s: summed true penetration, rtcd- / GIMPACT-hosted (most)",
                 f"{s['rtcd_max']:.3g} / {s['gimpact_max']:.3g}", "zoo", "zoo/README.md", [m]),
             Row("zoo scene: longest a pair stays deeper than 2% of its smaller body, rtcd- / GIMPACT-hosted "
-                "(goal ≤ 30 steps)", f"{run['rtcd']:.0f} / {run['gimpact']:.0f} steps", "zoo", "zoo/README.md", [m])]
+                "(goal ≤ 30 steps)", f"{run['rtcd']:.0f} / {run['gimpact']:.0f} steps", "zoo", "zoo/README.md", [m])
+            ] + zoo_seed_rows(m)
+
+
+def zoo_seed_rows(m):
+    rows, header = read_csv("zoo", "seeds/seeds.csv")
+    for key in ("seed", "host", "ground_depth_fraction_max", "longest_deep_run_steps"):
+        if key not in header:
+            raise ResultError(f"{RESULTS}/zoo/seeds/seeds.csv: no column {key}")
+    out = []
+    for host in ("rtcd", "gimpact"):
+        runs = [r for r in rows if r["host"] == host]
+        if not runs:
+            raise ResultError(f"{RESULTS}/zoo/seeds/seeds.csv: no {host} run")
+        ground = [100 * number(r["ground_depth_fraction_max"], "seeds.csv") for r in runs]
+        held = [number(r["longest_deep_run_steps"], "seeds.csv") for r in runs]
+        out.append(Row(f"zoo scene, seeds 1–{len(runs)}, {host}-hosted, from 1.5 s: deepest body in the ground ÷ its "
+                       "size (goal ≤ 1%); longest deep pair (goal ≤ 30 steps)",
+                       f"{min(ground):.2f}–{max(ground):.2f}%; {min(held):.0f}–{max(held):.0f} steps", "zoo",
+                       "zoo/seeds/seeds.csv", [m]))
+    return out
 
 
 def piles_rows():
