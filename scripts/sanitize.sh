@@ -15,7 +15,10 @@
 # full mode (opencl runs through the same host code in the other OpenCL
 # tests here), the committed scenes run end to end (SimCli.RunLeavesItsOutputs
 # runs `rtcd run`), and the torus's mass against its closed form (the other
-# mass tests run the same integration). The allocation count is not built
+# mass tests run the same integration), and the page in headless Chromium
+# (label view: the default scene's 300 steps and its contact replay take
+# about 10 minutes instrumented; CliFiles.ViewWritesARunsPage writes a page
+# here). The allocation count is not built
 # here (it replaces malloc, which would bypass ASan's allocator).
 # The OpenCL tests run too, on PoCL's CPU devices (ctest sets POCL_DEVICES):
 # LeakSanitizer skips PoCL's known leak by the function it happens in
@@ -33,5 +36,5 @@ export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp}
 # crashed on every run of some OpenCL tests (Conformance.CubeSunkIntoHalfSpace),
 # after they passed. Leaks are still checked from stacks, static TLS and globals.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-fast_unwind_on_malloc=0:intercept_tls_get_addr=0}
-ctest --preset asan -j2 -LE "differential|consumer" \
+ctest --preset asan -j2 -LE "differential|consumer|view" \
   -E "^Backends/Robustness\.[A-Za-z]+/(basic|opencl_basic)( |$)|^Backends/Metamorphic\.[A-Za-z]+/opencl|^Bench\.WritesEveryTable|^OpenCl\.BvhMissesNothingInFullMode|^CliFiles\.BenchRunsTheSmallStream|^Robustness\.EmbreeInstructionSets|^SimCli\.CommittedScenesRunAndBadScenesExit2|^Mass\.TorusMatchesClosedForm" --timeout 600 "$@"
