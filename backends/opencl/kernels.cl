@@ -162,6 +162,20 @@ __kernel void rtcd_count(__global const rtcd_device_job* jobs, rtcd_uint job_cou
   counts[j] = n;
 }
 
+/* The batch's ray list laid out on the device: each job's first ray (an
+ * exclusive prefix sum of the counts) and, after the last job, the total,
+ * which bounds rtcd_trace, so no count goes through the host before the
+ * trace. One work-item: a batch holds a few thousand jobs at most. */
+__kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* first_rays) {
+  rtcd_uint j, n = 0;
+  if (get_global_id(0) != 0) return;
+  for (j = 0; j < job_count; ++j) {
+    first_rays[j] = n;
+    n += counts[j];
+  }
+  first_rays[job_count] = n;
+}
+
 /* One item: a candidate moves to its place in the batch's ray list. */
 __kernel void rtcd_scatter(__global const rtcd_uint* first_items, __global const rtcd_uint* first_rays,
                            rtcd_uint job_count, rtcd_uint item_count, __global const rtcd_uchar* flags,
@@ -212,7 +226,9 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
   return o;
 }
 
-/* Compacted layout: one work-item per candidate ray of the batch's list. */
+/* Compacted layout: one work-item per candidate ray of the batch's list,
+ * whose length (first_rays[job_count]) the device counted: the launch may
+ * be larger. */
 __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                          __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                          __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
@@ -220,10 +236,11 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
                               __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                               __global const rtcd_bvh_node* nodes,
                          __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
-                         rtcd_uint ray_count, __global rtcd_outcome* outcomes) {
+                         __global const rtcd_uint* first_rays, rtcd_uint job_count,
+                         __global rtcd_outcome* outcomes) {
   rtcd_uint i = get_global_id(0);
   rtcd_candidate c;
-  if (i >= ray_count) return;
+  if (i >= first_rays[job_count]) return;
   c = rays[i];
   outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces, ring_first, ring, nodes,
                                      primitives);

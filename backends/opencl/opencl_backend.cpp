@@ -9,10 +9,13 @@
 //      fp64); a full job's possible rays are the items of the source-tree
 //      leaves near its overlap box, which the host finds and sends as one
 //      bit per node, and rtcd_list lists in item order;
-//   2. rtcd_count: per job, a prefix sum over the flags, so the candidates
-//      form a compacted list in the CPU's order; the counts come back;
+//   2. rtcd_count and rtcd_offsets: per job, a prefix sum over the flags,
+//      then one over the jobs, so the candidates form a compacted list in
+//      the CPU's order, laid out on the device;
 //   3. rtcd_scatter and rtcd_trace: candidates to their places, then one
-//      work-item per ray running kernel/trace.h; the outcomes come back and
+//      work-item per ray running kernel/trace.h; the counts and the
+//      outcomes come back after one wait (the outcomes up to a bound
+//      guessed from the last batch; past it, a second read and wait) and
 //      are written into each job's slot, so the step is in job order;
 //   4. rtcd_keep: the rays each job goes on tracking stay on the device for
 //      the next step's walks (jobs and frames go up, outcomes come down).
@@ -61,31 +64,12 @@ enum ShapeBuffer : size_t {
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
-struct Device {
-  cl::CommandQueue queue;
-  cl::Kernel list, select, count, scatter, trace, trace_items, keep;
-  // Shape data, by ShapeBuffer.
-  std::vector<cl::Buffer> shapes;
-  size_t shapes_uploaded = 0;
+// One batch's share of a device: its jobs, their host-side data and the
+// buffers they use. A step's two batches have a lane each, so the full
+// batch runs on the device while the walks are set up.
+struct Lane {
   GrowingBuffer jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
-  // Tracked rays that stay on the device, by step parity: the step's
-  // batches append what they keep to one (rtcd_keep) while its walks read
-  // the other, written the step before, with the rays that came from
-  // elsewhere (the host's mirror) appended there.
-  GrowingBuffer kept[2];
-  uint32_t kept_used[2] = {0, 0};  // rays in each
-  uint32_t upload_base = 0;        // this batch's uploaded tracked rays in the read buffer
-  uint32_t kept_base = 0;          // this batch's kept rays in the written buffer
-  bool keeps = false;              // some job of the batch keeps a residence
-  DeviceWork work;  // this step's, over its batches
-  // Commands whose device time is not counted yet (profiling events, kernel
-  // or copy); kept until seen finished.
-  struct Timed {
-    cl::Event event;
-    bool kernel;
-  };
-  std::vector<Timed> timed;
-  // This batch: the jobs it runs (batch indices) and their host-side data.
+  // The jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
   std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
@@ -96,9 +80,40 @@ struct Device {
   std::vector<rtcd_outcome> host_outcomes;
   std::vector<rtcd_uchar> host_flags;  // grid layout
   uint32_t items = 0, ray_count = 0;
+  // The compacted layout's outcome read: how many are read before the
+  // count is known (read_bound), guessed from the last batch's rays per item.
+  uint32_t read_bound = 0;
+  double rays_per_item = 0;
   size_t load = 0;
+  uint32_t upload_base = 0;  // the batch's uploaded tracked rays in the read buffer
+  uint32_t kept_base = 0;    // the batch's kept rays in the written buffer
+  bool keeps = false;        // some job of the batch keeps a residence
+  cl::Event outcomes_read;   // its last read
+  bool pending = false;      // enqueued, not finished
+};
+
+struct Device {
+  cl::CommandQueue queue;
+  cl::Kernel list, select, count, offsets, scatter, trace, trace_items, keep;
+  // Shape data, by ShapeBuffer.
+  std::vector<cl::Buffer> shapes;
+  size_t shapes_uploaded = 0;
+  // Tracked rays that stay on the device, by step parity: the step's
+  // batches append what they keep to one (rtcd_keep) while its walks read
+  // the other, written the step before, with the rays that came from
+  // elsewhere (the host's mirror) appended there.
+  GrowingBuffer kept[2];
+  uint32_t kept_used[2] = {0, 0};  // rays in each (an upper bound while a batch is pending)
+  DeviceWork work;  // this step's, over its batches
+  // Commands whose device time is not counted yet (profiling events, kernel
+  // or copy); kept until seen finished.
+  struct Timed {
+    cl::Event event;
+    bool kernel;
+  };
+  std::vector<Timed> timed;
+  Lane lanes[2];  // by batch: full, walked
   size_t group_size = 1;
-  cl::Event counts_read, outcomes_read;
 };
 
 class OpenClExecutor final : public RayExecutor {
@@ -125,12 +140,14 @@ class OpenClExecutor final : public RayExecutor {
           device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
         }
         device.count = cl::Kernel(runtime_->program, "rtcd_count");
+        device.offsets = cl::Kernel(runtime_->program, "rtcd_offsets");
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
         device.keep = cl::Kernel(runtime_->program, "rtcd_keep");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
-             {&device.list, &device.select, &device.count, &device.scatter, &device.trace, &device.trace_items, &device.keep})
+             {&device.list, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
+              &device.trace_items, &device.keep})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
@@ -164,14 +181,18 @@ class OpenClExecutor final : public RayExecutor {
   void execute(RayBatch& batch) override {
     if (fault_message_.empty()) {
       try {
-        return run(batch.jobs, config_, batch.outcomes, batch.tallies);
+        return run(batch);
       } catch (const cl::Error& e) {
         fail(describe(e) + " during a step");
       } catch (const Error& e) {
         fail(e.what());
       }
     }
+    // The CPU takes over from the jobs, the full batch's too when it was
+    // still on a device.
     on_cpu_ = true;
+    if (full_ && full_ != &batch) cpu().execute(*full_);
+    full_ = nullptr;
     cpu().execute(batch);
   }
 
@@ -304,13 +325,21 @@ class OpenClExecutor final : public RayExecutor {
     write_at(d, b, v, 0);
   }
 
+  // Elements [first, first + count) of `b` into `v`, which holds them.
+  template <class T>
+  void read(Device& d, const GrowingBuffer& b, std::vector<T>& v, size_t first, size_t count,
+            cl::Event* done = nullptr) {
+    cl::Event* event = timed(d, false);
+    d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, first * sizeof(T), count * sizeof(T), v.data() + first, nullptr,
+                              event);
+    if (done) *done = *event;
+    d.work.bytes_from_device += count * sizeof(T);
+    ++d.work.reads;
+  }
+
   template <class T>
   void read(Device& d, const GrowingBuffer& b, std::vector<T>& v, cl::Event* done = nullptr) {
-    cl::Event* event = timed(d, false);
-    d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, 0, v.size() * sizeof(T), v.data(), nullptr, event);
-    if (done) *done = *event;
-    d.work.bytes_from_device += v.size() * sizeof(T);
-    ++d.work.reads;
+    read(d, b, v, 0, v.size(), done);
   }
 
   // The job's tracked rays are on a device already: they were kept there
@@ -323,20 +352,22 @@ class OpenClExecutor final : public RayExecutor {
   // A pair's two jobs run on one device: the one it ran on before, while it
   // stays in the broad phase (its residences say which; walking jobs find
   // their kept rays there), or, for a new pair, the device with the fewest
-  // expected rays so far.
-  void assign(std::span<const RayJob> jobs, const Config& config) {
+  // expected rays so far. Into each device's lane `which`.
+  void assign(size_t which, std::span<const RayJob> jobs, const Config& config) {
     for (Device& d : devices_) {
-      d.batch_jobs.clear();
-      d.host_jobs.clear();
-      d.host_first_items.clear();
-      d.host_frames.clear();
-      d.host_near.clear();
-      d.host_tracked.clear();
-      d.items = 0;
-      d.ray_count = 0;
-      d.load = 0;
-      d.upload_base = runtime_->place_on_device ? d.kept_used[(step_ + 1) % 2] : 0;
-      d.keeps = false;
+      Lane& lane = d.lanes[which];
+      lane.batch_jobs.clear();
+      lane.host_jobs.clear();
+      lane.host_first_items.clear();
+      lane.host_frames.clear();
+      lane.host_near.clear();
+      lane.host_tracked.clear();
+      lane.items = 0;
+      lane.ray_count = 0;
+      lane.load = 0;
+      lane.upload_base = runtime_->place_on_device ? d.kept_used[(step_ + 1) % 2] : 0;
+      lane.keeps = false;
+      lane.pending = false;
     }
     // Jobs 2i and 2i + 1 are one pair's (RayBatch).
     const auto placed = [&](uint32_t j) -> const Residence* {
@@ -346,50 +377,51 @@ class OpenClExecutor final : public RayExecutor {
     };
     for (uint32_t j = 0; j + 1 < jobs.size(); j += 2)
       if (const Residence* r = placed(j))
-        for (uint32_t k : {j, j + 1}) add(devices_[r->place], k, jobs[k], config);
+        for (uint32_t k : {j, j + 1}) add(devices_[r->place].lanes[which], k, jobs[k], config);
     for (uint32_t j = 0; j + 1 < jobs.size(); j += 2) {
       if (placed(j)) continue;
-      Device& d = *std::min_element(devices_.begin(), devices_.end(),
-                                    [](const Device& a, const Device& b) { return a.load < b.load; });
-      for (uint32_t k : {j, j + 1}) add(d, k, jobs[k], config);
+      Device& d = *std::min_element(devices_.begin(), devices_.end(), [&](const Device& a, const Device& b) {
+        return a.lanes[which].load < b.lanes[which].load;
+      });
+      for (uint32_t k : {j, j + 1}) add(d.lanes[which], k, jobs[k], config);
     }
   }
 
   // A job's items: its tracked rays, or the items (origins and edges) of its near leaves.
   // Their count is also the rays it is expected to cast, by which jobs are
   // spread over the devices.
-  void add(Device& d, uint32_t j, const RayJob& job, const Config& config) {
+  void add(Lane& lane, uint32_t j, const RayJob& job, const Config& config) {
     rtcd_device_job dj{};
     dj.params = make_trace_params(job, *shapes_[job.source], *shapes_[job.target], config);
-    const size_t items = job.overlap.empty() ? 0 : job.iterative ? job.tracked.size() : mark_near_leaves(d, job, dj);
+    const size_t items = job.overlap.empty() ? 0 : job.iterative ? job.tracked.size() : mark_near_leaves(lane, job, dj);
     dj.source = job.source;
     dj.target = job.target;
-    dj.first_item = d.items;
+    dj.first_item = lane.items;
     dj.item_count = rtcd_uint(items);
     if (resident(job)) {
       dj.first_tracked = job.residence->first;
     } else {
-      dj.first_tracked = d.upload_base + rtcd_uint(d.host_tracked.size());
+      dj.first_tracked = lane.upload_base + rtcd_uint(lane.host_tracked.size());
       if (job.iterative && items > 0) {
-        for (const RayOutcome& r : job.tracked) d.host_tracked.push_back({r.vertex, r.triangle, r.entry});
+        for (const RayOutcome& r : job.tracked) lane.host_tracked.push_back({r.vertex, r.triangle, r.entry});
       }
     }
-    d.batch_jobs.push_back(j);
-    d.host_jobs.push_back(dj);
-    d.host_first_items.push_back(d.items);
-    d.host_frames.push_back(make_frame(job));
-    d.items += rtcd_uint(items);
-    d.load += items;
-    d.keeps = d.keeps || job.residence;
+    lane.batch_jobs.push_back(j);
+    lane.host_jobs.push_back(dj);
+    lane.host_first_items.push_back(lane.items);
+    lane.host_frames.push_back(make_frame(job));
+    lane.items += rtcd_uint(items);
+    lane.load += items;
+    lane.keeps = lane.keeps || job.residence;
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves), as bits
   // by node appended to the batch's; returns how many items they hold.
-  size_t mark_near_leaves(Device& d, const RayJob& job, rtcd_device_job& dj) const {
+  size_t mark_near_leaves(Lane& lane, const RayJob& job, rtcd_device_job& dj) const {
     const RaySources& rs = shapes_[job.source]->sources();
-    dj.first_near = rtcd_uint(d.host_near.size());
-    d.host_near.resize(d.host_near.size() + (rs.nodes.size() + 31) / 32, 0);
-    rtcd_uint* bits = d.host_near.data() + dj.first_near;
+    dj.first_near = rtcd_uint(lane.host_near.size());
+    lane.host_near.resize(lane.host_near.size() + (rs.nodes.size() + 31) / 32, 0);
+    rtcd_uint* bits = lane.host_near.data() + dj.first_near;
     size_t items = 0;
     visit_near_leaves(job, rs, shapes_[job.target]->distance_bound(), edge_reach(dj.params), [&](uint32_t n) {
       bits[n / 32] |= rtcd_uint(1) << (n % 32);
@@ -399,41 +431,44 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // The host's placement, for devices without fp64: the same rtcd_place_item.
-  void place_on_host(Device& d) {
-    d.host_rays.clear();
-    for (uint32_t l = 0; l < d.host_jobs.size(); ++l) {
-      const rtcd_device_job& job = d.host_jobs[l];
+  void place_on_host(Lane& lane) {
+    lane.host_rays.clear();
+    for (uint32_t l = 0; l < lane.host_jobs.size(); ++l) {
+      const rtcd_device_job& job = lane.host_jobs[l];
       const RaySources& rs = shapes_[job.source]->sources();
       const rtcd_uint* leaves = data_.source_leaves.data() + data_.table[job.source].first_source;
       // Tracked rays, or every item of the near leaves (rtcd_list).
       const uint32_t count = job.params.iterative || job.item_count == 0 ? job.item_count : rs.item_count();
       for (uint32_t k = 0; k < count; ++k) {
         rtcd_candidate c{k, -1, -1, l, {}, {}};
-        if (!job.params.iterative && !rtcd_near_leaf(d.host_near.data() + job.first_near, leaves[k])) continue;
+        if (!job.params.iterative && !rtcd_near_leaf(lane.host_near.data() + job.first_near, leaves[k])) continue;
         if (job.params.iterative) {
-          const rtcd_tracked& r = d.host_tracked[job.first_tracked + k];
+          const rtcd_tracked& r = lane.host_tracked[job.first_tracked + k];
           c.vertex = r.vertex;
           c.start = r.triangle;
           c.entry = r.entry;
         }
         const Eigen::Vector3f o = rs.item_origin(c.vertex), dir = rs.item_direction(c.vertex);
-        if (rtcd_place_item(&d.host_frames[l], &job.params, c.vertex, rtcd_v3(o.x(), o.y(), o.z()),
+        if (rtcd_place_item(&lane.host_frames[l], &job.params, c.vertex, rtcd_v3(o.x(), o.y(), o.z()),
                             rtcd_v3(dir.x(), dir.y(), dir.z()), &c.origin, &c.direction)) {
-          d.host_rays.push_back(c);
-          ++d.host_counts[l];
+          lane.host_rays.push_back(c);
+          ++lane.host_counts[l];
         }
       }
     }
   }
 
-  void first_rays(Device& d) {
-    d.host_first_rays.resize(d.host_counts.size());
+  // Each job's first ray from the counts, and after the last, the total
+  // (rtcd_offsets on the host).
+  static void first_rays(Lane& lane) {
+    lane.host_first_rays.resize(lane.host_counts.size() + 1);
     uint32_t n = 0;
-    for (size_t l = 0; l < d.host_counts.size(); ++l) {
-      d.host_first_rays[l] = n;
-      n += d.host_counts[l];
+    for (size_t l = 0; l < lane.host_counts.size(); ++l) {
+      lane.host_first_rays[l] = n;
+      n += lane.host_counts[l];
     }
-    d.ray_count = n;
+    lane.host_first_rays.back() = n;
+    lane.ray_count = n;
   }
 
   // A fixed work-group size, the global size rounded up to it (kernels
@@ -449,215 +484,271 @@ class OpenClExecutor final : public RayExecutor {
   // The arguments both trace kernels open with: the jobs, then the shape
   // data from the table to the BVH's triangle lists. Returns the next
   // argument's index.
-  static cl_uint bind_jobs_and_shapes(Device& d, cl::Kernel& k) {
-    k.setArg(0, d.jobs.buffer);
+  static cl_uint bind_jobs_and_shapes(Device& d, Lane& lane, cl::Kernel& k) {
+    k.setArg(0, lane.jobs.buffer);
     for (size_t i = 0; i < kTracedShapeBuffers; ++i) k.setArg(cl_uint(1 + i), d.shapes[i]);
     return cl_uint(1 + kTracedShapeBuffers);
   }
 
-  void enqueue_trace(Device& d) {
-    reserve(d.outcomes, d.ray_count * sizeof(rtcd_outcome));
-    d.host_outcomes.resize(d.ray_count);
+  // rtcd_trace over at most `rays` rays, the first `read_count` outcomes
+  // read back.
+  void enqueue_trace(Device& d, Lane& lane, uint32_t rays, uint32_t read_count) {
+    reserve(lane.outcomes, rays * sizeof(rtcd_outcome));
+    lane.host_outcomes.resize(rays);
     cl::Kernel& k = d.trace;
-    const cl_uint next = bind_jobs_and_shapes(d, k);
-    k.setArg(next, d.rays.buffer);
-    k.setArg(next + 1, rtcd_uint(d.ray_count));
-    k.setArg(next + 2, d.outcomes.buffer);
-    launch(d, k, d.ray_count);
-    read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
-    if (runtime_->place_on_device) keep(d, d.first_rays, d.ray_count);
-    d.queue.flush();
+    const cl_uint next = bind_jobs_and_shapes(d, lane, k);
+    k.setArg(next, lane.rays.buffer);
+    k.setArg(next + 1, lane.first_rays.buffer);
+    k.setArg(next + 2, rtcd_uint(lane.host_jobs.size()));
+    k.setArg(next + 3, lane.outcomes.buffer);
+    launch(d, k, rays);
+    read(d, lane.outcomes, lane.host_outcomes, 0, read_count, &lane.outcomes_read);
   }
 
   // rtcd_keep after the trace: the batch's tracked rays for the next step
   // stay on the device, each job's at the place of its items (grid) or
-  // rays (compacted) past kept_base, which the residences record.
-  void keep(Device& d, const GrowingBuffer& firsts, uint32_t count) {
-    if (!d.keeps) return;
+  // rays (compacted) past kept_base, which the residences record; room is
+  // made for `count`, an upper bound when the rays are not counted yet.
+  void keep(Device& d, Lane& lane, const GrowingBuffer& firsts, uint32_t count) {
+    if (!lane.keeps) return;
     GrowingBuffer& kept = d.kept[step_ % 2];
     uint32_t& used = d.kept_used[step_ % 2];
-    d.kept_base = used;
+    lane.kept_base = used;
     reserve_tracked(d, kept, size_t(used) + count, used);
     used += count;
     cl::Kernel& k = d.keep;
-    k.setArg(0, d.jobs.buffer);
-    k.setArg(1, rtcd_uint(d.host_jobs.size()));
-    k.setArg(2, rtcd_uint(grid(d)));
+    k.setArg(0, lane.jobs.buffer);
+    k.setArg(1, rtcd_uint(lane.host_jobs.size()));
+    k.setArg(2, rtcd_uint(grid(lane)));
     k.setArg(3, firsts.buffer);
-    k.setArg(4, grid(d) ? firsts.buffer : d.counts.buffer);
-    k.setArg(5, d.flags.buffer);
-    k.setArg(6, d.outcomes.buffer);
-    k.setArg(7, d.kept_base);
+    k.setArg(4, grid(lane) ? firsts.buffer : lane.counts.buffer);
+    k.setArg(5, lane.flags.buffer);
+    k.setArg(6, lane.outcomes.buffer);
+    k.setArg(7, lane.kept_base);
     k.setArg(8, kept.buffer);
-    launch(d, k, d.host_jobs.size());
+    launch(d, k, lane.host_jobs.size());
   }
 
   // How a batch's rays are laid out (DeviceLayout). Compacted: a prefix sum
-  // over each job's candidate flags, then one work-item per candidate (two
-  // round trips: the counts, then the outcomes). Grid (Figure 2.6): one
-  // work-item per item, candidate or not, traced in place (one round trip,
-  // every item's outcome read back). By mode: grid for iterative batches,
-  // whose items are last step's rays and nearly all candidates; compacted
-  // for full ones, where most vertices are not (docs/results/opencl.md
-  // measures both). The pipeline never mixes modes in a batch.
-  bool grid(const Device& d) const {
-    return layout_ == DeviceLayout::grid || (layout_ == DeviceLayout::by_mode && d.host_jobs.front().params.iterative);
+  // over each job's candidate flags, then one work-item per candidate (the
+  // counts and outcomes read back together). Grid (Figure 2.6): one
+  // work-item per item, candidate or not, traced in place (every item's
+  // outcome read back). By mode: grid for iterative batches, whose items
+  // are last step's rays and nearly all candidates; compacted for full
+  // ones, where most vertices are not (docs/results/opencl.md measures
+  // both). The pipeline never mixes modes in a batch.
+  bool grid(const Lane& lane) const {
+    return runtime_->place_on_device &&
+           (layout_ == DeviceLayout::grid ||
+            (layout_ == DeviceLayout::by_mode && lane.host_jobs.front().params.iterative));
   }
 
   // The grid layout: every item placed and traced in place by one kernel
   // (the non-candidates return at once), flags and outcomes back in one
-  // read, the candidates' outcomes kept in item order, which is ray order.
-  void trace_in_place(Device& d) {
-    reserve(d.outcomes, d.items * sizeof(rtcd_outcome));
-    d.host_outcomes.resize(d.items);
-    d.host_flags.resize(d.items);
+  // read; finish_grid keeps the candidates' outcomes.
+  void trace_in_place(Device& d, Lane& lane) {
+    reserve(lane.outcomes, lane.items * sizeof(rtcd_outcome));
+    lane.host_outcomes.resize(lane.items);
+    lane.host_flags.resize(lane.items);
     cl::Kernel& k = d.trace_items;
-    const cl_uint next = bind_jobs_and_shapes(d, k);
-    k.setArg(next, d.first_items.buffer);
-    k.setArg(next + 1, d.frames.buffer);
-    k.setArg(next + 2, rtcd_uint(d.host_jobs.size()));
-    k.setArg(next + 3, rtcd_uint(d.items));
+    const cl_uint next = bind_jobs_and_shapes(d, lane, k);
+    k.setArg(next, lane.first_items.buffer);
+    k.setArg(next + 1, lane.frames.buffer);
+    k.setArg(next + 2, rtcd_uint(lane.host_jobs.size()));
+    k.setArg(next + 3, rtcd_uint(lane.items));
     k.setArg(next + 4, d.shapes[kOrigins]);
     k.setArg(next + 5, d.shapes[kDirections]);
-    k.setArg(next + 6, d.vertices.buffer);
+    k.setArg(next + 6, lane.vertices.buffer);
     k.setArg(next + 7, d.kept[(step_ + 1) % 2].buffer);
-    k.setArg(next + 8, d.flags.buffer);
-    k.setArg(next + 9, d.outcomes.buffer);
-    launch(d, k, d.items);
-    read(d, d.flags, d.host_flags);
-    read(d, d.outcomes, d.host_outcomes, &d.outcomes_read);
-    keep(d, d.first_items, d.items);
-    d.queue.flush();
-    wait(d, d.outcomes_read);
+    k.setArg(next + 8, lane.flags.buffer);
+    k.setArg(next + 9, lane.outcomes.buffer);
+    launch(d, k, lane.items);
+    read(d, lane.flags, lane.host_flags);
+    read(d, lane.outcomes, lane.host_outcomes, &lane.outcomes_read);
+    keep(d, lane, lane.first_items, lane.items);
+  }
+
+  // The flagged items' outcomes, in item order, which is ray order.
+  static void finish_grid(Lane& lane) {
     uint32_t n = 0;
-    for (size_t l = 0; l < d.host_jobs.size(); ++l) {
-      const rtcd_device_job& job = d.host_jobs[l];
+    for (size_t l = 0; l < lane.host_jobs.size(); ++l) {
+      const rtcd_device_job& job = lane.host_jobs[l];
       const uint32_t first = n;
       for (uint32_t i = job.first_item; i < job.first_item + job.item_count; ++i)
-        if (d.host_flags[i]) d.host_outcomes[n++] = d.host_outcomes[i];
-      d.host_counts[l] = n - first;
+        if (lane.host_flags[i]) lane.host_outcomes[n++] = lane.host_outcomes[i];
+      lane.host_counts[l] = n - first;
     }
-    first_rays(d);
+    first_rays(lane);
   }
 
   // Phase 1, on the device: a full batch's items listed; for the compacted
-  // layout, candidates placed, flagged and counted per job, and the counts
-  // come back (the grid layout places them as it traces them).
-  void place_on_device(Device& d) {
-    const auto jobs_count = rtcd_uint(d.host_jobs.size());
-    write(d, d.jobs, d.host_jobs);
-    write(d, d.first_items, d.host_first_items);
-    write(d, d.frames, d.host_frames);
+  // layout, candidates placed, flagged, counted per job and laid out (the
+  // grid layout places them as it traces them).
+  void place_on_device(Device& d, Lane& lane) {
+    const auto jobs_count = rtcd_uint(lane.host_jobs.size());
+    write(d, lane.jobs, lane.host_jobs);
+    write(d, lane.first_items, lane.host_first_items);
+    write(d, lane.frames, lane.host_frames);
     // Tracked rays that were not kept here come from the host's mirror,
     // after the kept ones the walks read.
     GrowingBuffer& tracked = d.kept[(step_ + 1) % 2];
-    reserve_tracked(d, tracked, size_t(d.upload_base) + d.host_tracked.size(), d.upload_base);
-    write_at(d, tracked, d.host_tracked, d.upload_base);
-    d.kept_used[(step_ + 1) % 2] = d.upload_base + rtcd_uint(d.host_tracked.size());
-    reserve(d.flags, d.items);
-    reserve(d.vertices, d.items * sizeof(rtcd_uint));
-    if (!d.host_jobs.front().params.iterative) {
-      write(d, d.near, d.host_near);
+    reserve_tracked(d, tracked, size_t(lane.upload_base) + lane.host_tracked.size(), lane.upload_base);
+    write_at(d, tracked, lane.host_tracked, lane.upload_base);
+    d.kept_used[(step_ + 1) % 2] = lane.upload_base + rtcd_uint(lane.host_tracked.size());
+    reserve(lane.flags, lane.items);
+    reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
+    if (!lane.host_jobs.front().params.iterative) {
+      write(d, lane.near, lane.host_near);
       cl::Kernel& l = d.list;
-      l.setArg(0, d.jobs.buffer);
+      l.setArg(0, lane.jobs.buffer);
       l.setArg(1, jobs_count);
       l.setArg(2, d.shapes[kTable]);
       l.setArg(3, d.shapes[kSourceLeaves]);
-      l.setArg(4, d.near.buffer);
-      l.setArg(5, d.vertices.buffer);
+      l.setArg(4, lane.near.buffer);
+      l.setArg(5, lane.vertices.buffer);
       launch(d, l, jobs_count);
     }
-    if (grid(d)) return;
-    reserve(d.staging, d.items * sizeof(rtcd_candidate));
+    if (grid(lane)) return;
+    reserve(lane.staging, lane.items * sizeof(rtcd_candidate));
     cl::Kernel& s = d.select;
-    s.setArg(0, d.jobs.buffer);
-    s.setArg(1, d.first_items.buffer);
-    s.setArg(2, d.frames.buffer);
+    s.setArg(0, lane.jobs.buffer);
+    s.setArg(1, lane.first_items.buffer);
+    s.setArg(2, lane.frames.buffer);
     s.setArg(3, jobs_count);
-    s.setArg(4, rtcd_uint(d.items));
+    s.setArg(4, rtcd_uint(lane.items));
     s.setArg(5, d.shapes[kTable]);
     s.setArg(6, d.shapes[kOrigins]);
     s.setArg(7, d.shapes[kDirections]);
-    s.setArg(8, d.vertices.buffer);
+    s.setArg(8, lane.vertices.buffer);
     s.setArg(9, tracked.buffer);
-    s.setArg(10, d.flags.buffer);
-    s.setArg(11, d.staging.buffer);
-    launch(d, s, d.items);
-    reserve(d.slots, d.items * sizeof(rtcd_uint));
-    reserve(d.counts, jobs_count * sizeof(rtcd_uint));
+    s.setArg(10, lane.flags.buffer);
+    s.setArg(11, lane.staging.buffer);
+    launch(d, s, lane.items);
+    reserve(lane.slots, lane.items * sizeof(rtcd_uint));
+    reserve(lane.counts, jobs_count * sizeof(rtcd_uint));
     cl::Kernel& c = d.count;
-    c.setArg(0, d.jobs.buffer);
+    c.setArg(0, lane.jobs.buffer);
     c.setArg(1, jobs_count);
-    c.setArg(2, d.flags.buffer);
-    c.setArg(3, d.slots.buffer);
-    c.setArg(4, d.counts.buffer);
+    c.setArg(2, lane.flags.buffer);
+    c.setArg(3, lane.slots.buffer);
+    c.setArg(4, lane.counts.buffer);
     launch(d, c, jobs_count);
-    read(d, d.counts, d.host_counts, &d.counts_read);
-    d.queue.flush();
+    reserve(lane.first_rays, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
+    cl::Kernel& o = d.offsets;
+    o.setArg(0, lane.counts.buffer);
+    o.setArg(1, jobs_count);
+    o.setArg(2, lane.first_rays.buffer);
+    launch(d, o, 1);
   }
 
-  // One device's share of the batch, start to end. Each device is driven
-  // from its own host thread: some drivers (PoCL's `basic`) run a device's
-  // commands in the thread that flushes or waits on it.
-  void run_on(Device& d, bool inject_mid_step) {
-    d.host_counts.assign(d.host_jobs.size(), 0);
-    if (d.items == 0) {
-      d.ray_count = 0;
-      return;
+  // The compacted layout on the device: candidates scattered and traced
+  // with no count known on the host (the launch covers every item); the
+  // counts, and the outcomes up to a bound guessed from the last batch,
+  // are read back (finish_compacted reads the rest, if the guess fell short).
+  void trace_compacted(Device& d, Lane& lane) {
+    reserve(lane.rays, lane.items * sizeof(rtcd_candidate));
+    cl::Kernel& k = d.scatter;
+    k.setArg(0, lane.first_items.buffer);
+    k.setArg(1, lane.first_rays.buffer);
+    k.setArg(2, rtcd_uint(lane.host_jobs.size()));
+    k.setArg(3, rtcd_uint(lane.items));
+    k.setArg(4, lane.flags.buffer);
+    k.setArg(5, lane.slots.buffer);
+    k.setArg(6, lane.staging.buffer);
+    k.setArg(7, lane.rays.buffer);
+    launch(d, k, lane.items);
+    lane.read_bound = std::min<uint32_t>(lane.items, uint32_t(1.25 * lane.rays_per_item * lane.items) + 64);
+    read(d, lane.counts, lane.host_counts);
+    enqueue_trace(d, lane, lane.items, lane.read_bound);
+    keep(d, lane, lane.first_rays, lane.items);
+  }
+
+  // After the wait: the layout of the rays the device counted, and the
+  // outcomes past the guessed bound, after a second wait.
+  void finish_compacted(Device& d, Lane& lane) {
+    first_rays(lane);
+    if (lane.ray_count > lane.read_bound) {
+      read(d, lane.outcomes, lane.host_outcomes, lane.read_bound, lane.ray_count - lane.read_bound,
+           &lane.outcomes_read);
+      wait(d, lane.outcomes_read);
     }
+    lane.rays_per_item = double(lane.ray_count) / lane.items;
+  }
+
+  // One device's share of a batch, enqueued and flushed; nothing waits.
+  // Each device is driven from its own host thread: some drivers (PoCL's
+  // `basic`) run a device's commands in the thread that flushes or waits
+  // on it.
+  void enqueue(Device& d, Lane& lane, bool inject_mid_step) {
+    lane.host_counts.assign(lane.host_jobs.size(), 0);
+    lane.ray_count = 0;
+    if (lane.items == 0) return;
     upload_shapes(d);
     if (!runtime_->place_on_device) {
-      place_on_host(d);
+      place_on_host(lane);
     } else {
-      place_on_device(d);
+      place_on_device(d, lane);
     }
     if (inject_mid_step) throw cl::Error(CL_OUT_OF_RESOURCES, "clEnqueueNDRangeKernel (injected fault)");
-    if (grid(d) && runtime_->place_on_device) {
-      trace_in_place(d);
-      return;
+    if (grid(lane)) {
+      trace_in_place(d, lane);
+    } else if (runtime_->place_on_device) {
+      trace_compacted(d, lane);
+    } else {  // the host placed and counted the rays
+      first_rays(lane);
+      if (lane.ray_count == 0) return;
+      lane.read_bound = lane.ray_count;
+      write(d, lane.jobs, lane.host_jobs);
+      write(d, lane.first_rays, lane.host_first_rays);
+      write(d, lane.rays, lane.host_rays);
+      enqueue_trace(d, lane, lane.ray_count, lane.ray_count);
     }
-    // Phase 2: compaction and tracing; the outcomes come back.
-    if (runtime_->place_on_device) wait(d, d.counts_read);
-    first_rays(d);
-    if (d.ray_count == 0) return;
-    if (runtime_->place_on_device) {
-      const auto jobs_count = rtcd_uint(d.host_jobs.size());
-      write(d, d.first_rays, d.host_first_rays);
-      reserve(d.rays, d.ray_count * sizeof(rtcd_candidate));
-      cl::Kernel& k = d.scatter;
-      k.setArg(0, d.first_items.buffer);
-      k.setArg(1, d.first_rays.buffer);
-      k.setArg(2, jobs_count);
-      k.setArg(3, rtcd_uint(d.items));
-      k.setArg(4, d.flags.buffer);
-      k.setArg(5, d.slots.buffer);
-      k.setArg(6, d.staging.buffer);
-      k.setArg(7, d.rays.buffer);
-      launch(d, k, d.items);
-    } else {
-      write(d, d.jobs, d.host_jobs);
-      write(d, d.rays, d.host_rays);
-    }
-    enqueue_trace(d);
-    wait(d, d.outcomes_read);
+    d.queue.flush();
+    lane.pending = true;
   }
 
-  void run(std::span<const RayJob> jobs, const Config& config, std::span<std::vector<RayOutcome>> outcomes,
-                std::span<RayTally> tallies) {
-    assign(jobs, config);
+  // Both lanes' outcomes on the host: one wait, for the last read enqueued
+  // (an in-order queue has finished everything before it), then what each
+  // layout does with them.
+  void finish(Device& d) {
+    Lane* last = nullptr;
+    for (Lane& lane : d.lanes)
+      if (lane.pending) last = &lane;
+    if (!last) return;
+    wait(d, last->outcomes_read);
+    for (Lane& lane : d.lanes) {
+      if (!lane.pending) continue;
+      if (grid(lane)) {
+        finish_grid(lane);
+      } else {
+        finish_compacted(d, lane);
+      }
+    }
+  }
+
+  // The step's full batch is enqueued and left to run; the walked one
+  // (RayExecutor::execute) is enqueued behind it, and each device's thread
+  // waits once for both and hands their outcomes to their slots (disjoint
+  // ones: the step keeps job order, and no copy waits for the slowest
+  // device).
+  void run(RayBatch& batch) {
+    const size_t which = batch.iterative ? 1 : 0;
+    assign(which, batch.jobs, config_);
     // The injected mid-step fault strikes the second batch with work, after
     // its first kernels were enqueued.
     bool work = false;
-    for (const Device& d : devices_) work = work || d.items > 0;
+    for (const Device& d : devices_) work = work || d.lanes[which].items > 0;
     batches_ += work;
     const bool inject_mid_step = fault_ == OpenClFault::mid_step && batches_ == 2;
-    // Each device's thread also hands its jobs' outcomes to their slots
-    // (disjoint ones): the step keeps job order, and no copy waits for the
-    // slowest device.
+    if (!batch.iterative) full_ = &batch;
     auto run_device = [&](uint32_t i) {
-      run_on(devices_[i], inject_mid_step);
-      collect(devices_[i]);
-      deliver(i, jobs, outcomes, tallies);
+      Device& d = devices_[i];
+      enqueue(d, d.lanes[which], inject_mid_step);
+      if (!batch.iterative) return;
+      finish(d);
+      collect(d);
+      if (full_) deliver(i, d.lanes[0], *full_);
+      deliver(i, d.lanes[1], batch);
     };
     if (devices_.size() == 1) {
       run_device(0);
@@ -669,30 +760,31 @@ class OpenClExecutor final : public RayExecutor {
           },
           tbb::simple_partitioner());
     }
+    if (batch.iterative) full_ = nullptr;
   }
 
-  // Device i's jobs' outcomes into their slots, settled, and where their
-  // kept rays are, for the next step.
-  void deliver(uint32_t i, std::span<const RayJob> jobs, std::span<std::vector<RayOutcome>> outcomes,
-               std::span<RayTally> tallies) {
+  // Device i's jobs of a batch: their outcomes into their slots, settled,
+  // and where their kept rays are, for the next step.
+  void deliver(uint32_t i, const Lane& lane, RayBatch& batch) {
     Device& d = devices_[i];
-    for (size_t l = 0; l < d.batch_jobs.size(); ++l) {
-      const RayJob& job = jobs[d.batch_jobs[l]];
-      d.work.jobs += d.host_jobs[l].item_count > 0;
-      std::vector<RayOutcome>& out = outcomes[d.batch_jobs[l]];
-      if (d.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
+    for (size_t l = 0; l < lane.batch_jobs.size(); ++l) {
+      const uint32_t j = lane.batch_jobs[l];
+      const RayJob& job = batch.jobs[j];
+      d.work.jobs += lane.host_jobs[l].item_count > 0;
+      std::vector<RayOutcome>& out = batch.outcomes[j];
+      if (lane.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
         if (job.residence) *job.residence = {runtime_->place_on_device ? step_ : 0, i, 0, true};
         out.clear();
       } else {
         if (job.residence)
           *job.residence = {runtime_->place_on_device ? step_ : 0, i,
-                            d.kept_base + (grid(d) ? d.host_first_items[l] : d.host_first_rays[l]), true};
-        const rtcd_outcome* first = d.host_outcomes.data() + d.host_first_rays[l];
-        out.assign(first, first + d.host_counts[l]);
-        d.work.rays += d.host_counts[l];
+                            lane.kept_base + (grid(lane) ? lane.host_first_items[l] : lane.host_first_rays[l]), true};
+        const rtcd_outcome* first = lane.host_outcomes.data() + lane.host_first_rays[l];
+        out.assign(first, first + lane.host_counts[l]);
+        d.work.rays += lane.host_counts[l];
       }
-      tallies[d.batch_jobs[l]] = settle_outcomes(out, job.iterative);
-      tallies[d.batch_jobs[l]].place = int32_t(i);
+      batch.tallies[j] = settle_outcomes(out, job.iterative);
+      batch.tallies[j].place = int32_t(i);
     }
   }
 
@@ -711,6 +803,7 @@ class OpenClExecutor final : public RayExecutor {
   uint64_t batches_ = 0;  // batches with rays
   uint64_t step_ = 0;     // begin_step calls
   bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback
+  RayBatch* full_ = nullptr;  // the step's full batch, enqueued and not finished
 };
 }  // namespace
 }  // namespace rtcd::opencl

@@ -283,6 +283,30 @@ TEST(OpenCl, DeviceCommandsAreCountedPerStep) {
   EXPECT_LT(walking[0].bytes_from, walking[1].bytes_from);
 }
 
+// A step waits once a device: the device lays out the full batch's ray
+// list itself, the walks are enqueued behind it, and the host reads the
+// counts and the outcomes (up to a bound guessed from the last full batch)
+// after one wait. The first full batch has no guess (64 rays), so the rest
+// of its outcomes takes a second read and wait; the output is the CPU's
+// either way (the bit-for-bit suites).
+TEST(OpenCl, StepsWaitOnce) {
+  for (const Mode mode : {Mode::full, Mode::automatic}) {
+    SCOPED_TRACE(mode_name(mode));
+    Scene scene{"concave", mode, 16, 12};
+    scene.config.displacement_threshold = 2.5 * validation::make_family("concave").step_motion();
+    const auto steps = run_scene("opencl:devices=1", scene);
+    expect_ran_on_devices(steps, 1);
+    ASSERT_GT(steps[0].stats.devices[0].rays, 64u);
+    EXPECT_EQ(steps[0].stats.devices[0].waits, 2u);
+    size_t both = 0;
+    for (size_t s = 1; s < steps.size(); ++s) {
+      EXPECT_EQ(steps[s].stats.devices[0].waits, 1u) << "step " << s;
+      both += steps[s].stats.pairs_full > 0 && steps[s].stats.pairs_iterative > 0;
+    }
+    if (mode == Mode::automatic) EXPECT_GT(both, 0u) << "no step had both batches: the test shows nothing";
+  }
+}
+
 // A pair stays on one device while it stays in the broad phase: the full
 // steps equation 2.1 sends it back to run where its walks ran, both of its
 // directions together, and the pairs are spread over both devices. The CPU

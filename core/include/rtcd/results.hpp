@@ -206,6 +206,9 @@ struct StepStats : RayCounts {
   // Why this step's rays ran on the CPU instead of the backend's devices
   // (from the failing batch on); empty when they did not.
   std::string cpu_fallback;
+  // Wall time of the step's stages. A device backend enqueues the full
+  // batch in seconds_full and waits for it with the walks, in
+  // seconds_iterative; their sum is the step's ray time either way.
   double seconds_prepare = 0, seconds_full = 0, seconds_iterative = 0, seconds_gather = 0;
 
   // Zeroes every figure, keeping the buffer of `devices`: a steady step

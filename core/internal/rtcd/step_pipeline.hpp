@@ -158,7 +158,10 @@ class RayExecutor {
   // RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when it stays tracked (its
   // `triangle` is where the next walk starts). batch.outcomes[j] and
   // batch.tallies[j] receive what settle_outcomes makes of them; the
-  // executor only clears and fills them.
+  // executor only clears and fills them. Each step executes its full batch,
+  // then its walked one; the full batch's outcomes may be left to be filled
+  // by the walked batch's call (an executor that runs both at once, as a
+  // device does, waits for them together).
   virtual void execute(RayBatch& batch) = 0;
   // After the step's batches: where its rays ran and what moving them took
   // (StepStats::devices, their sums, ::cpu_fallback), so a host or a test
