@@ -117,6 +117,47 @@ std::string case_name(const ::testing::TestParamInfo<std::tuple<std::string, Mod
 INSTANTIATE_TEST_SUITE_P(Families, BasicVariant, ::testing::Combine(kFamilies, kModes), case_name);
 INSTANTIATE_TEST_SUITE_P(Families, BvhVariant, ::testing::Combine(kFamilies, kModes), case_name);
 
+// The edge and depth knobs, each turned from its default: both OpenCL kinds
+// still step as `basic` does (one side's edges, rested and held edges, the
+// thesis' ray contact), and the knob changed the run (else the case would
+// repeat the default one).
+class KnobVariant : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(KnobVariant, EqualsBasicBitForBit) {
+  const std::string& knob = GetParam();
+  Scene scene{"concave", Mode::automatic, 16, 8};
+  Config& c = scene.config;
+  if (knob == "edge_contacts") c.edge_contacts = false;
+  if (knob == "edges_both_sides") c.edges_both_sides = false;
+  if (knob == "edges_beside_contacts") c.edges_beside_contacts = false;
+  if (knob == "edge_retest_motion") c.edge_retest_motion = 4.0 * validation::make_family("concave").step_motion();
+  if (knob == "nearest_surface") c.nearest_surface = false;
+  // What the edge and depth knobs move: edge work and the contacts' depths.
+  const auto fingerprint = [](const std::vector<StepResult>& run) {
+    std::tuple<size_t, size_t, size_t, double> f{};
+    for (const StepResult& r : run) {
+      std::get<0>(f) += r.stats.edges_tested;
+      std::get<1>(f) += r.stats.edges_held;
+      std::get<2>(f) += r.contacts.size();
+      for (const Contact& k : r.contacts) std::get<3>(f) += k.depth;
+    }
+    return f;
+  };
+  const auto reference = run_scene("basic", scene);
+  EXPECT_NE(fingerprint(reference), fingerprint(run_scene("basic", Scene{"concave", Mode::automatic, 16, 8})))
+      << knob << " changed nothing";
+  for (const std::string backend : {"opencl", "opencl-basic"}) {
+    SCOPED_TRACE(backend);
+    const auto device = run_scene(backend, scene);
+    expect_ran_on_devices(device, 2);
+    EXPECT_GT(expect_same_run(device, reference), 0u);
+  }
+}
+INSTANTIATE_TEST_SUITE_P(Knobs, KnobVariant,
+                         ::testing::Values("edge_contacts", "edges_both_sides", "edges_beside_contacts",
+                                           "edge_retest_motion", "nearest_surface"),
+                         [](const ::testing::TestParamInfo<std::string>& info) { return info.param; });
+
 // Pairs certified apart (trace_separated_pairs off) are decided on the host
 // from the same outcomes: the devices certify, skip and expire the same
 // pairs as basic.
