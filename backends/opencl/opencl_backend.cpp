@@ -103,7 +103,7 @@ struct Device {
   // the other, written the step before, with the rays that came from
   // elsewhere (the host's mirror) appended there.
   GrowingBuffer kept[2];
-  uint32_t kept_used[2] = {0, 0};  // rays in each (an upper bound while a batch is pending)
+  uint32_t kept_used[2] = {0, 0};  // room used in each: a compacted batch takes its items' worth
   DeviceWork work;  // this step's, over its batches
   // Commands whose device time is not counted yet (profiling events, kernel
   // or copy); kept until seen finished.
