@@ -7,7 +7,7 @@ namespace rtcd {
 namespace {
 
 constexpr int kBins = 16;
-constexpr size_t kLeafSize = 4;  // at most this many triangles stop the split
+constexpr size_t kLeafSize = 2;  // at most this many triangles stop the split
 
 struct Box {
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity());

@@ -36,10 +36,11 @@ RTCD_INLINE rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray*
 #endif
 }
 
-/* Always the nearest: `enough` only lets a tracer stop sooner. */
+/* The brute force always finds the nearest: `enough` only lets a tracer
+ * stop sooner. */
 RTCD_INLINE rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius, float enough) {
 #ifdef RTCD_BVH
-  return rtcd_bvh_nearest(point, radius, t->nodes, t->node_count, t->primitives, t->positions, t->triangles,
+  return rtcd_bvh_nearest(point, radius, enough, t->nodes, t->node_count, t->primitives, t->positions, t->triangles,
                           t->zero_area);
 #else
   return rtcd_brute_nearest(point, radius, t->positions, t->triangles, t->zero_area, t->triangle_count);

@@ -52,7 +52,7 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   int kind = rtcd_classify(w.status, w.t, 1, 0.1f) + rtcd_line_kind(w.status, w.t, 1, 1, 0, 0.1f) +
              rtcd_walked_kind(w.status, w.t, s.status, s.t, 1, 1, 0, 0.1f);
   rtcd_hit h = rtcd_bvh_first_hit(&ray, nodes, 1u, primitives, positions, triangles, zero_area, 1.0f);
-  rtcd_int near = rtcd_bvh_nearest(ray.origin, 1.0f, nodes, 1u, primitives, positions, triangles, zero_area);
+  rtcd_int near = rtcd_bvh_nearest(ray.origin, 1.0f, 0.5f, nodes, 1u, primitives, positions, triangles, zero_area);
   rtcd_tracer t;
   rtcd_trace_params p;
   rtcd_candidate c;

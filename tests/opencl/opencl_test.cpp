@@ -12,7 +12,7 @@
 #include <random>
 #include <set>
 
-#include "opencl/bvh.hpp"
+#include "bvh_answers.hpp"
 #include "opencl/opencl_backend.hpp"
 #include "rtcd/backend.hpp"
 #include "rtcd/mesh_gen.hpp"
@@ -175,44 +175,11 @@ TEST(OpenCl, CertifiedPairsEqualBasic) {
 }
 
 // The device's BVH traversal is plain C: checked on the host against the
-// brute force, ray by ray and point by point, with the tree's shape.
+// brute force (bvh_answers.hpp), with the device's stack.
 TEST(Bvh, AnswersAsTheBruteForce) {
-  std::mt19937 g(5);
-  std::uniform_real_distribution<float> u(-1.2f, 1.2f);
-  for (const Mesh& mesh : {gen::concave_blob(902, 3), gen::torus(1.0, 0.3, 24, 12), gen::icosphere(1.0, 3)}) {
-    const FlatBvh bvh = build_flat_bvh(mesh);
-    std::vector<int> seen(mesh.triangle_count(), 0);
-    for (rtcd_uint t : bvh.primitives) ++seen[t];
-    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), long(mesh.triangle_count())) << "each triangle in one leaf";
-    ASSERT_FALSE(bvh.nodes.empty());
-    EXPECT_EQ(bvh.nodes[0].escape, bvh.nodes.size());
-    const auto* positions = reinterpret_cast<const rtcd_vec3*>(mesh.positions().data());
-    const auto* triangles = reinterpret_cast<const rtcd_uint*>(mesh.triangles().data());
-    const rtcd_uchar* zero_area = mesh.zero_area().data();
-    const auto n = rtcd_uint(mesh.triangle_count());
-    size_t hits = 0;
-    for (int i = 0; i < 4000; ++i) {
-      const rtcd_vec3 origin = rtcd_v3(u(g), u(g), u(g));
-      Eigen::Vector3f d(u(g), u(g), u(g));
-      if (i % 7 == 0) d = Eigen::Vector3f(0, 0, u(g));  // axis-parallel: slabs with zero components
-      if (d.norm() == 0.0f) continue;
-      d.normalize();
-      const rtcd_ray ray = rtcd_make_ray(origin, rtcd_v3(d.x(), d.y(), d.z()));
-      const float t_max = i % 2 ? 3.0e38f : 0.2f;
-      const rtcd_hit a = rtcd_bvh_first_hit(&ray, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.primitives.data(),
-                                            positions, triangles, zero_area, t_max);
-      const rtcd_hit b = rtcd_brute_first_hit(&ray, positions, triangles, zero_area, n, t_max);
-      ASSERT_EQ(a.triangle, b.triangle) << "ray " << i;
-      ASSERT_EQ(a.t, b.t) << "ray " << i;
-      hits += b.triangle >= 0;
-      const float radius = i % 3 ? 0.05f : 1.0f;
-      ASSERT_EQ(rtcd_bvh_nearest(origin, radius, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.primitives.data(),
-                                 positions, triangles, zero_area),
-                rtcd_brute_nearest(origin, radius, positions, triangles, zero_area, n))
-          << "point " << i;
-    }
-    EXPECT_GT(hits, 500u) << "too few hits: the comparison would be vacuous";
-  }
+  size_t deepest = 0;
+  expect_bvh_answers_as_the_brute_force(deepest);
+  EXPECT_LE(deepest, size_t(RTCD_BVH_STACK)) << "trees deeper than the device's stack";
 }
 
 // Against the exact reference, on the 20,000-triangle family as well.

@@ -9,7 +9,7 @@
 #include "tracer.h"
 
 /* A hit with t_num >= 0 on a located triangle: the triangle's distance, else -1. */
-RTCD_INLINE float rtcd_hit_distance(const rtcd_ray* ray, rtcd_vec3 v0, rtcd_vec3 v1, rtcd_vec3 v2) {
+RTCD_ALWAYS_INLINE float rtcd_hit_distance(const rtcd_ray* ray, rtcd_vec3 v0, rtcd_vec3 v1, rtcd_vec3 v2) {
   rtcd_location loc = rtcd_locate(ray, v0, v1, v2);
   if (!loc.inside || loc.t_num < 0.0f) return -1.0f;
   return loc.t_num / loc.det;

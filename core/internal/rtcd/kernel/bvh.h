@@ -1,9 +1,9 @@
-/* Stackless traversal of a bounding-volume hierarchy flattened depth first:
- * a node's first child is the next node, and `escape` is the node after its
- * subtree, so traversal needs no stack (a device thread keeps no more than a
- * node index). The answers follow the tie rules of tracer.h whatever the
- * tree: boxes are pruned only when they cannot hold a hit as near as the
- * best one, with margins wider than the rounding of the box tests. */
+/* Traversal of a bounding-volume hierarchy flattened depth first: a node's
+ * first child is the next node, and `escape` is the node after its subtree
+ * (for a first child, its sibling). The answers follow the tie rules of
+ * tracer.h whatever the tree and the visiting order: boxes are pruned only
+ * when they cannot hold a hit as near as the best one, with margins wider
+ * than the rounding of the box tests. */
 #ifndef RTCD_KERNEL_BVH_H
 #define RTCD_KERNEL_BVH_H
 
@@ -21,9 +21,14 @@ typedef struct {
  * the box tests round. */
 #define RTCD_BVH_MARGIN 1.0e-5f
 
-/* Whether the ray's line can meet the box at some t in [0, t_max]: slabs
- * by division (correctly rounded), each end widened by the margin. */
-RTCD_INLINE int rtcd_ray_meets_box(const rtcd_ray* ray, rtcd_vec3 lo, rtcd_vec3 hi, float t_max) {
+/* Branch-free selections (the compilers' min and max instructions). */
+#define RTCD_MIN(x, y) ((x) < (y) ? (x) : (y))
+#define RTCD_MAX(x, y) ((x) > (y) ? (x) : (y))
+
+/* Where the ray's line enters the box within [0, t_max], or -1 when it
+ * does not meet it there: slabs by division (correctly rounded), each end
+ * widened by the margin. */
+RTCD_INLINE float rtcd_ray_box_entry(const rtcd_ray* ray, rtcd_vec3 lo, rtcd_vec3 hi, float t_max) {
   float t_near = 0.0f, t_far = t_max;
   int k;
   for (k = 0; k < 3; ++k) {
@@ -31,7 +36,7 @@ RTCD_INLINE int rtcd_ray_meets_box(const rtcd_ray* ray, rtcd_vec3 lo, rtcd_vec3 
     float l = rtcd_component(lo, k), h = rtcd_component(hi, k);
     float t0, t1, a, b;
     if (d == 0.0f) {
-      if (o < l || o > h) return 0;
+      if (o < l || o > h) return -1.0f;
       continue;
     }
     t0 = (l - o) / d;
@@ -42,21 +47,117 @@ RTCD_INLINE int rtcd_ray_meets_box(const rtcd_ray* ray, rtcd_vec3 lo, rtcd_vec3 
     b = b > 0.0f ? b * (1.0f + RTCD_BVH_MARGIN) : b * (1.0f - RTCD_BVH_MARGIN);
     if (a > t_near) t_near = a;
     if (b < t_far) t_far = b;
-    if (t_near > t_far) return 0;
+    if (t_near > t_far) return -1.0f;
   }
-  return 1;
+  return t_near;
+}
+
+/* A ray as the slab tests read it: the inverse of each direction
+ * component, so a box costs products and no branch. A product rounds twice
+ * where a quotient rounds once, both far inside the margin. `divide` is set
+ * where an inverse would not serve (a zero or subnormal component): such a
+ * ray is tested by division. */
+typedef struct {
+  const rtcd_ray* ray;
+  rtcd_vec3 inverse;
+  int divide;
+} rtcd_slab_ray;
+
+RTCD_INLINE rtcd_slab_ray rtcd_make_slab_ray(const rtcd_ray* ray) {
+  rtcd_slab_ray s;
+  float inv[3];
+  int k;
+  s.ray = ray;
+  s.divide = 0;
+  for (k = 0; k < 3; ++k) {
+    float d = rtcd_component(ray->direction, k);
+    inv[k] = d == 0.0f ? 0.0f : 1.0f / d;
+    if (d == 0.0f || RTCD_FABS(inv[k]) > 3.0e38f) s.divide = 1;
+  }
+  s.inverse = rtcd_v3(inv[0], inv[1], inv[2]);
+  return s;
+}
+
+/* As rtcd_ray_box_entry, by the inverses. Widening is monotone, so the
+ * margin applies once to the nearest and farthest slab ends, exactly as it
+ * would to every end before they are compared. */
+RTCD_ALWAYS_INLINE float rtcd_slab_entry(const rtcd_slab_ray* s, rtcd_vec3 lo, rtcd_vec3 hi, float t_max) {
+  rtcd_vec3 o = s->ray->origin, inv = s->inverse;
+  float x0, x1, y0, y1, z0, z1, a, b;
+  if (s->divide) return rtcd_ray_box_entry(s->ray, lo, hi, t_max);
+  x0 = (lo.x - o.x) * inv.x;
+  x1 = (hi.x - o.x) * inv.x;
+  y0 = (lo.y - o.y) * inv.y;
+  y1 = (hi.y - o.y) * inv.y;
+  z0 = (lo.z - o.z) * inv.z;
+  z1 = (hi.z - o.z) * inv.z;
+  a = RTCD_MAX(RTCD_MAX(RTCD_MIN(x0, x1), RTCD_MIN(y0, y1)), RTCD_MAX(RTCD_MIN(z0, z1), 0.0f));
+  b = RTCD_MIN(RTCD_MAX(x0, x1), RTCD_MIN(RTCD_MAX(y0, y1), RTCD_MAX(z0, z1)));
+  a -= a * RTCD_BVH_MARGIN; /* a >= 0 */
+  b += RTCD_FABS(b) * RTCD_BVH_MARGIN;
+  b = RTCD_MIN(b, t_max);
+  return a <= b ? a : -1.0f;
 }
 
 /* Squared distance from a point to a box (0 inside). */
-RTCD_INLINE float rtcd_box_distance2(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3 hi) {
+RTCD_ALWAYS_INLINE float rtcd_box_distance2(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3 hi) {
   float d2 = 0.0f;
   int k;
   for (k = 0; k < 3; ++k) {
     float c = rtcd_component(p, k), l = rtcd_component(lo, k), h = rtcd_component(hi, k);
-    float d = c < l ? l - c : (c > h ? c - h : 0.0f);
+    float d = RTCD_MAX(RTCD_MAX(l - c, c - h), 0.0f);
     d2 += d * d;
   }
   return d2;
+}
+
+/* Nearer children first: a short stack of the farther ones, each with its
+ * entry distance (a ray's t, a point's squared distance), so a subtree
+ * pushed before a nearer hit was found is dropped when popped. Pruning with
+ * the best so far is the same test whenever it runs, so the order changes
+ * the work, not the answer. A deeper tree than the stack goes on in the
+ * subtree's own depth-first order, by escape links. */
+#ifndef RTCD_BVH_STACK
+#define RTCD_BVH_STACK 32
+#endif
+
+/* A leaf's triangles against the best hit so far. */
+RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_bvh_node node,
+                                         RTCD_GLOBAL const rtcd_uint* primitives,
+                                         RTCD_GLOBAL const rtcd_vec3* positions,
+                                         RTCD_GLOBAL const rtcd_uint* triangles,
+                                         RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
+  rtcd_uint k;
+  for (k = 0; k < node.count; ++k) {
+    rtcd_uint i = primitives[node.first + k];
+    float t;
+    if (zero_area[i]) continue;
+    t = rtcd_hit_distance(ray, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
+                          positions[triangles[3 * i + 2]]);
+    if (t >= 0.0f && t <= best->t && rtcd_hit_improves(*best, t, (rtcd_int)i)) {
+      best->t = t;
+      best->triangle = (rtcd_int)i;
+    }
+  }
+}
+
+/* The nodes [n, end) of a subtree in depth-first order, no stack. */
+RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint n,
+                                          rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
+                                          RTCD_GLOBAL const rtcd_vec3* positions,
+                                          RTCD_GLOBAL const rtcd_uint* triangles,
+                                          RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
+  while (n < end) {
+    rtcd_bvh_node node = nodes[n];
+    if (rtcd_slab_entry(slabs, node.lo, node.hi, best->t) < 0.0f) {
+      n = node.escape;
+    } else if (node.count == 0) {
+      n += 1;
+    } else {
+      rtcd_bvh_leaf_first_hit(slabs->ray, node, primitives, positions, triangles, zero_area, best);
+      n = node.escape;
+    }
+  }
 }
 
 /* As rtcd_brute_first_hit, over the tree. */
@@ -65,69 +166,149 @@ RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const r
                                         RTCD_GLOBAL const rtcd_vec3* positions,
                                         RTCD_GLOBAL const rtcd_uint* triangles,
                                         RTCD_GLOBAL const rtcd_uchar* zero_area, float t_max) {
+  rtcd_slab_ray slabs = rtcd_make_slab_ray(ray);
   rtcd_hit best;
-  rtcd_uint n = 0;
+  rtcd_uint stack[RTCD_BVH_STACK];
+  float entry[RTCD_BVH_STACK];
+  int top = 0;
   best.triangle = -1;
   best.t = t_max;
-  while (n < node_count) {
-    rtcd_bvh_node node = nodes[n];
-    rtcd_uint k;
-    if (!rtcd_ray_meets_box(ray, node.lo, node.hi, best.t)) {
-      n = node.escape;
-      continue;
-    }
-    if (node.count == 0) {
-      n += 1;
-      continue;
-    }
-    for (k = 0; k < node.count; ++k) {
-      rtcd_uint i = primitives[node.first + k];
-      float t;
-      if (zero_area[i]) continue;
-      t = rtcd_hit_distance(ray, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
-                            positions[triangles[3 * i + 2]]);
-      if (t >= 0.0f && t <= best.t && rtcd_hit_improves(best, t, (rtcd_int)i)) {
-        best.t = t;
-        best.triangle = (rtcd_int)i;
+  if (node_count == 0) return best;
+  entry[0] = rtcd_slab_entry(&slabs, nodes[0].lo, nodes[0].hi, best.t);
+  stack[0] = 0;
+  top = entry[0] < 0.0f ? 0 : 1;
+  while (top > 0) {
+    rtcd_uint n;
+    rtcd_bvh_node node;
+    --top;
+    if (entry[top] > best.t) continue;
+    n = stack[top];
+    node = nodes[n];
+    while (node.count == 0) { /* an inner node whose box the ray meets: its nearer child next */
+      rtcd_uint a = n + 1, b = nodes[a].escape, swap_node;
+      float ta = rtcd_slab_entry(&slabs, nodes[a].lo, nodes[a].hi, best.t);
+      float tb = rtcd_slab_entry(&slabs, nodes[b].lo, nodes[b].hi, best.t), swap_t;
+      if (tb >= 0.0f && (ta < 0.0f || tb < ta)) {
+        swap_node = a;
+        a = b;
+        b = swap_node;
+        swap_t = ta;
+        ta = tb;
+        tb = swap_t;
       }
+      if (ta < 0.0f) break;
+      if (tb >= 0.0f) {
+        if (top < RTCD_BVH_STACK) {
+          stack[top] = b;
+          entry[top] = tb;
+          ++top;
+        } else {
+          rtcd_bvh_range_first_hit(&slabs, nodes, b, nodes[b].escape, primitives, positions, triangles, zero_area,
+                                   &best);
+        }
+      }
+      n = a;
+      node = nodes[a];
     }
-    n = node.escape;
+    if (node.count != 0) rtcd_bvh_leaf_first_hit(ray, node, primitives, positions, triangles, zero_area, &best);
   }
   return best;
 }
 
-/* As rtcd_brute_nearest, over the tree. */
-RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, RTCD_GLOBAL const rtcd_bvh_node* nodes,
-                                      rtcd_uint node_count, RTCD_GLOBAL const rtcd_uint* primitives,
-                                      RTCD_GLOBAL const rtcd_vec3* positions,
+/* A leaf's triangles against the nearest so far. */
+RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_nearest(rtcd_vec3 point, rtcd_bvh_node node, RTCD_GLOBAL const rtcd_uint* primitives,
+                                       RTCD_GLOBAL const rtcd_vec3* positions, RTCD_GLOBAL const rtcd_uint* triangles,
+                                       RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
+  rtcd_uint k;
+  for (k = 0; k < node.count; ++k) {
+    rtcd_uint i = primitives[node.first + k];
+    float d2;
+    if (zero_area[i]) continue;
+    d2 = rtcd_point_triangle_distance2(point, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
+                                       positions[triangles[3 * i + 2]]);
+    if (d2 <= *best_d2 && rtcd_nearer(*best_d2, *best, d2, (rtcd_int)i)) {
+      *best_d2 = d2;
+      *best = (rtcd_int)i;
+    }
+  }
+}
+
+/* Whether a box at squared distance d2 may hold a triangle as near as the
+ * best: the margin keeps ties. */
+RTCD_INLINE int rtcd_bvh_box_near(float d2, float best_d2) { return d2 * (1.0f - RTCD_BVH_MARGIN) <= best_d2; }
+
+/* The nodes [n, end) of a subtree in depth-first order, no stack. */
+RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint n,
+                                        rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
+                                        RTCD_GLOBAL const rtcd_vec3* positions,
+                                        RTCD_GLOBAL const rtcd_uint* triangles,
+                                        RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
+  while (n < end) {
+    rtcd_bvh_node node = nodes[n];
+    if (!rtcd_bvh_box_near(rtcd_box_distance2(point, node.lo, node.hi), *best_d2)) {
+      n = node.escape;
+    } else if (node.count == 0) {
+      n += 1;
+    } else {
+      rtcd_bvh_leaf_nearest(point, node, primitives, positions, triangles, zero_area, best, best_d2);
+      n = node.escape;
+    }
+  }
+}
+
+/* As rtcd_brute_nearest, over the tree; or, when enough > 0, the first
+ * triangle found within enough of the point (tracer.h's contract). */
+RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, float enough,
+                                      RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint node_count,
+                                      RTCD_GLOBAL const rtcd_uint* primitives, RTCD_GLOBAL const rtcd_vec3* positions,
                                       RTCD_GLOBAL const rtcd_uint* triangles,
                                       RTCD_GLOBAL const rtcd_uchar* zero_area) {
   rtcd_int best = -1;
-  float best_d2 = radius * radius;
-  rtcd_uint n = 0;
-  while (n < node_count) {
-    rtcd_bvh_node node = nodes[n];
-    rtcd_uint k;
-    if (rtcd_box_distance2(point, node.lo, node.hi) * (1.0f - RTCD_BVH_MARGIN) > best_d2) {
-      n = node.escape;
-      continue;
-    }
-    if (node.count == 0) {
-      n += 1;
-      continue;
-    }
-    for (k = 0; k < node.count; ++k) {
-      rtcd_uint i = primitives[node.first + k];
-      float d2;
-      if (zero_area[i]) continue;
-      d2 = rtcd_point_triangle_distance2(point, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
-                                         positions[triangles[3 * i + 2]]);
-      if (d2 <= best_d2 && rtcd_nearer(best_d2, best, d2, (rtcd_int)i)) {
-        best_d2 = d2;
-        best = (rtcd_int)i;
+  float best_d2 = radius * radius, enough_d2 = enough > 0.0f ? enough * enough : -1.0f;
+  rtcd_uint stack[RTCD_BVH_STACK];
+  float distance2[RTCD_BVH_STACK];
+  int top = 0;
+  if (node_count == 0) return best;
+  distance2[0] = rtcd_box_distance2(point, nodes[0].lo, nodes[0].hi);
+  stack[0] = 0;
+  top = rtcd_bvh_box_near(distance2[0], best_d2) ? 1 : 0;
+  while (top > 0) {
+    rtcd_uint n;
+    rtcd_bvh_node node;
+    --top;
+    if (!rtcd_bvh_box_near(distance2[top], best_d2)) continue;
+    n = stack[top];
+    node = nodes[n];
+    while (node.count == 0) { /* an inner node whose box may hold the nearest: its nearer child next */
+      rtcd_uint a = n + 1, b = nodes[a].escape, swap_node;
+      float da = rtcd_box_distance2(point, nodes[a].lo, nodes[a].hi);
+      float db = rtcd_box_distance2(point, nodes[b].lo, nodes[b].hi), swap_d2;
+      if (db < da) {
+        swap_node = a;
+        a = b;
+        b = swap_node;
+        swap_d2 = da;
+        da = db;
+        db = swap_d2;
       }
+      if (!rtcd_bvh_box_near(da, best_d2)) break;
+      if (rtcd_bvh_box_near(db, best_d2)) {
+        if (top < RTCD_BVH_STACK) {
+          stack[top] = b;
+          distance2[top] = db;
+          ++top;
+        } else {
+          rtcd_bvh_range_nearest(point, nodes, b, nodes[b].escape, primitives, positions, triangles, zero_area, &best,
+                                 &best_d2);
+        }
+      }
+      n = a;
+      node = nodes[a];
     }
-    n = node.escape;
+    if (node.count != 0) {
+      rtcd_bvh_leaf_nearest(point, node, primitives, positions, triangles, zero_area, &best, &best_d2);
+      if (best_d2 <= enough_d2) break;
+    }
   }
   return best;
 }

@@ -53,7 +53,7 @@ typedef struct {
   float det;    /* positive scale of the barycentrics, 0 when edge-on */
 } rtcd_location;
 
-RTCD_INLINE rtcd_location rtcd_locate(const rtcd_ray* ray, rtcd_vec3 v0, rtcd_vec3 v1, rtcd_vec3 v2) {
+RTCD_ALWAYS_INLINE rtcd_location rtcd_locate(const rtcd_ray* ray, rtcd_vec3 v0, rtcd_vec3 v1, rtcd_vec3 v2) {
   rtcd_location loc;
   rtcd_vec3 a = rtcd_sub(v0, ray->origin);
   rtcd_vec3 b = rtcd_sub(v1, ray->origin);

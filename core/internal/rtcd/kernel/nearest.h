@@ -15,7 +15,7 @@ RTCD_INLINE rtcd_vec3 rtcd_scale(rtcd_vec3 a, float s) { return rtcd_v3(a.x * s,
  * supports (1e-9 to 1e12): a triangle outside 2^-20 .. 2^20 across is
  * scaled by the power of two nearest its size (exact), so they stay near
  * 1; the common sizes skip the scaling's two library calls. */
-RTCD_INLINE float rtcd_point_triangle_distance2(rtcd_vec3 p, rtcd_vec3 a, rtcd_vec3 b, rtcd_vec3 c) {
+RTCD_ALWAYS_INLINE float rtcd_point_triangle_distance2(rtcd_vec3 p, rtcd_vec3 a, rtcd_vec3 b, rtcd_vec3 c) {
   rtcd_vec3 ab = rtcd_sub(b, a), ac = rtcd_sub(c, a), ap = rtcd_sub(p, a), bp, cp, q, d;
   float size = RTCD_FABS(ab.x), d1, d2, d3, d4, d5, d6, vc, vb, va, unit;
   int e;

@@ -11,6 +11,7 @@
 #pragma OPENCL FP_CONTRACT OFF
 #define RTCD_GLOBAL __global
 #define RTCD_INLINE static inline
+#define RTCD_ALWAYS_INLINE static inline __attribute__((always_inline))
 #define RTCD_SQRT(x) sqrt(x)
 #define RTCD_FABS(x) fabs(x)
 #define RTCD_ILOGB(x) ilogb(x)
@@ -29,6 +30,7 @@ typedef uchar rtcd_uchar;
 #include <stdint.h>
 #define RTCD_GLOBAL
 #define RTCD_INLINE static inline
+#define RTCD_ALWAYS_INLINE static inline __attribute__((always_inline))
 #define RTCD_SQRT(x) sqrtf(x)
 #define RTCD_FABS(x) fabsf(x)
 #define RTCD_ILOGB(x) ilogbf(x)

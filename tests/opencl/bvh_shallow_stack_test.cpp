@@ -1,0 +1,17 @@
+// The BVH traversal with a stack far shallower than its trees, so subtrees
+// past the stack go by escape links: the answers must not change.
+#define RTCD_BVH_STACK 2
+#include "bvh_answers.hpp"
+
+namespace rtcd::test {
+namespace {
+
+TEST(Bvh, AnswersAsTheBruteForceWithAShallowStack) {
+  size_t deepest = 0;
+  expect_bvh_answers_as_the_brute_force(deepest);
+  EXPECT_GT(deepest, size_t(RTCD_BVH_STACK) + 1)
+      << "no tree deeper than the stack: the escape-link path went untested";
+}
+
+}  // namespace
+}  // namespace rtcd::test
