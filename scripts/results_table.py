@@ -24,6 +24,7 @@ import difflib
 import json
 import os
 import re
+import statistics
 import subprocess
 import sys
 import textwrap
@@ -425,6 +426,33 @@ def opencl_rows():
                 f"{steady[0]:.0f} → {steady[1]:.0f} µs: {steady[0] / steady[1]:.2f}×", "opencl", source, [m])]
 
 
+def pocl_avalanche_rows():
+    """Phase C detect of the avalanche replays on PoCL against Embree, from a
+    file whose header names its date, commit and machine."""
+    source = "opencl/bvh_traversal.txt"
+    where = f"{RESULTS}/{source}"
+    text = read_text("opencl", "bvh_traversal.txt")
+    stamp = {}
+    for key in ("date", "commit", "machine"):
+        found = re.search(rf"^# {key}: (.+)$", text, re.M)
+        if not found:
+            raise ResultError(f"{where}: no '# {key}:' line")
+        stamp[key] = found.group(1).strip()
+    detect = {"new": [], "embree": []}
+    for section in re.split(r"^## ", text, flags=re.M)[1:]:
+        who = section.split()[0]
+        row = re.search(r"^\| C \| \d+ \| ([0-9.]+) \|", section, re.M)
+        if who in detect:
+            if not row:
+                raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no phase C row")
+            detect[who].append(float(row.group(1)))
+    if not detect["new"] or not detect["embree"]:
+        raise ResultError(f"{where}: no 'new' or no 'embree' replay")
+    opencl, embree = statistics.median(detect["new"]), statistics.median(detect["embree"])
+    return [Row("avalanche phase C detect on PoCL: OpenCL on one `basic` device ÷ Embree on one thread (floor 1.5×)",
+                f"{opencl:.1f} ÷ {embree:.1f} ms: {opencl / embree:.2f}×", "opencl", source, [stamp])]
+
+
 def gpu_rows():
     m = meta("gpu")
     phase_c = {}
@@ -529,7 +557,7 @@ def judged_rows():
 
 def all_rows():
     return (run_rows() + avalanche_rows() + stream_rows() + stream_end_rows() + validation_rows() + truth_rows()
-            + zoo_rows() + piles_rows() + opencl_rows() + gpu_rows() + python_rows() + campaign_rows() + judged_rows()
+            + zoo_rows() + piles_rows() + opencl_rows() + pocl_avalanche_rows() + gpu_rows() + python_rows() + campaign_rows() + judged_rows()
             + view_rows())
 
 

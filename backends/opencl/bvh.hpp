@@ -1,6 +1,6 @@
-// The bounding-volume hierarchy the device traverses without a stack
-// (kernel/bvh.h): built once per mesh on the host with binned SAH, then
-// flattened depth first with escape links.
+// The bounding-volume hierarchy the device traverses (kernel/bvh.h): built
+// once per mesh on the host with binned SAH, then flattened depth first
+// with escape links.
 #pragma once
 
 #include <vector>

@@ -1,6 +1,6 @@
 /* The OpenCL executor's kernels. The per-ray work is the shared code of
  * core/include/rtcd/kernel (trace.h), run against this file's tracer: the
- * brute-force traversal, or the stackless BVH with -DRTCD_BVH. The build
+ * brute-force traversal, or the BVH (nearer child first) with -DRTCD_BVH. The build
  * inlines every #include (rtcd_embed_kernel), so the binary carries the
  * whole source. */
 #include "device_types.h"

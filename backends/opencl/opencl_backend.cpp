@@ -847,7 +847,7 @@ std::vector<BackendInfo> opencl_backend_infos() {
       std::string devices;
       for (size_t i = 0; i < found.devices.size(); ++i)
         devices += (i ? "; " : "") + describe(found.platform, found.devices[i], i);
-      list.push_back({"opencl", true, "stackless BVH on " + devices});
+      list.push_back({"opencl", true, "BVH on " + devices});
       list.push_back({"opencl-basic", true, "every ray against every triangle on " + devices});
     } catch (const std::exception& e) {
       list.push_back({"opencl", false, e.what()});

@@ -20,7 +20,7 @@ struct CpuFallback {
   std::function<std::unique_ptr<MeshTracerFactory>()> tracers;
 };
 
-// options.kind: opencl (stackless BVH) or opencl_basic (every ray against
+// options.kind: opencl (a BVH) or opencl_basic (every ray against
 // every triangle, bit for bit the CPU `basic`). Throws BackendError for a
 // device index that does not exist; a missing platform or any later device
 // fault is reported on stderr once and handled by `fallback`.

@@ -17,7 +17,7 @@ enum class BackendKind : uint8_t {
   automatic,     // the fastest usable one, in a fixed order: embree, opencl, basic
   basic,         // CPU threads, every ray against every triangle
   embree,        // CPU threads, Embree's BVH
-  opencl,        // OpenCL devices, a stackless BVH
+  opencl,        // OpenCL devices, a BVH
   opencl_basic,  // OpenCL devices, every ray against every triangle (bit for bit `basic`)
 };
 // "auto", "basic", "embree", "opencl", "opencl-basic".
