@@ -23,7 +23,9 @@ OpenClFault requested_opencl_fault() {
   if (s == "build") return OpenClFault::build;
   if (s == "out_of_memory") return OpenClFault::out_of_memory;
   if (s == "mid_step") return OpenClFault::mid_step;
-  throw BackendError("RTCD_OPENCL_FAULT='" + s + "': expected no_platform, build, out_of_memory or mid_step");
+  if (s == "behind_full") return OpenClFault::behind_full;
+  throw BackendError("RTCD_OPENCL_FAULT='" + s +
+                     "': expected no_platform, build, out_of_memory, mid_step or behind_full");
 }
 
 }  // namespace rtcd

@@ -734,12 +734,17 @@ class OpenClExecutor final : public RayExecutor {
   void run(RayBatch& batch) {
     const size_t which = batch.iterative ? 1 : 0;
     assign(which, batch.jobs, config_);
-    // The injected mid-step fault strikes the second batch with work, after
-    // its first kernels were enqueued.
-    bool work = false;
-    for (const Device& d : devices_) work = work || d.lanes[which].items > 0;
+    // An injected mid-step fault strikes after the batch's first kernels
+    // were enqueued: the second batch with work, or the first walked one
+    // behind a full batch with work.
+    bool work = false, full_work = false;
+    for (const Device& d : devices_) {
+      work = work || d.lanes[which].items > 0;
+      full_work = full_work || (full_ && d.lanes[0].items > 0);
+    }
     batches_ += work;
-    const bool inject_mid_step = fault_ == OpenClFault::mid_step && batches_ == 2;
+    const bool inject_mid_step = (fault_ == OpenClFault::mid_step && batches_ == 2) ||
+                                 (fault_ == OpenClFault::behind_full && batch.iterative && work && full_work);
     if (!batch.iterative) full_ = &batch;
     auto run_device = [&](uint32_t i) {
       Device& d = devices_[i];

@@ -33,8 +33,10 @@ std::vector<BackendInfo> opencl_backend_infos();
 
 // Faults a test forces on narrow phases made after the call; the
 // environment variable RTCD_OPENCL_FAULT (no_platform, build, out_of_memory,
-// mid_step) does the same for a whole process.
-enum class OpenClFault { none, no_platform, build, out_of_memory, mid_step };
+// mid_step, behind_full) does the same for a whole process. mid_step strikes
+// the second batch with work; behind_full the first walked batch enqueued
+// behind a full batch with work, which is then still on the devices.
+enum class OpenClFault { none, no_platform, build, out_of_memory, mid_step, behind_full };
 void inject_opencl_fault(OpenClFault fault);
 // The fault in force: the injected one, else RTCD_OPENCL_FAULT's; throws
 // BackendError for a value it does not know.

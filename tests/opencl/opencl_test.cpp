@@ -423,6 +423,29 @@ INSTANTIATE_TEST_SUITE_P(
                       std::make_tuple(OpenClFault::mid_step, std::string("during a step"))),
     fault_name);
 
+// A fault in a walked batch while the step's full batch is still on the
+// devices: the CPU runs both from their jobs, and the output is the
+// uninterrupted one. The scene sends pairs back to full tracing while
+// others walk, so some step has both batches.
+TEST(OpenCl, FaultBehindAPendingFullBatchFinishesBothOnTheCpu) {
+  Scene scene{"concave", Mode::automatic, 16, 8};
+  scene.config.displacement_threshold = 0.004;  // most pairs sent back within a few steps
+  const auto reference = run_scene("basic", scene);
+  inject_opencl_fault(OpenClFault::behind_full);
+  ::testing::internal::CaptureStderr();
+  const auto faulted = run_scene("opencl-basic", scene);
+  const std::string err = ::testing::internal::GetCapturedStderr();
+  inject_opencl_fault(OpenClFault::none);
+  EXPECT_NE(err.find("during a step"), std::string::npos) << err;
+  size_t struck = 0;
+  while (struck < faulted.size() && faulted[struck].stats.cpu_fallback.empty()) ++struck;
+  ASSERT_LT(struck, faulted.size()) << "the fault never struck";
+  EXPECT_GT(faulted[struck].stats.pairs_full, 0u) << "step " << struck << ": no full batch was pending";
+  EXPECT_GT(faulted[struck].stats.pairs_iterative, 0u) << "step " << struck;
+  expect_ran_on_devices(std::vector<StepResult>(faulted.begin(), faulted.begin() + long(struck)), 2);
+  EXPECT_GT(expect_same_run(faulted, reference), 0u);
+}
+
 // The BVH variant falls back to the fastest CPU tracer and still answers.
 TEST(OpenCl, BvhFaultFallsBackToEmbree) {
   inject_opencl_fault(OpenClFault::mid_step);
