@@ -123,10 +123,10 @@ RTCD_ALWAYS_INLINE float rtcd_box_distance2(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3
 
 /* A leaf's triangles against the best hit so far. */
 RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_bvh_node node,
-                                         RTCD_GLOBAL const rtcd_uint* primitives,
-                                         RTCD_GLOBAL const rtcd_vec3* positions,
-                                         RTCD_GLOBAL const rtcd_uint* triangles,
-                                         RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
+                                                RTCD_GLOBAL const rtcd_uint* primitives,
+                                                RTCD_GLOBAL const rtcd_vec3* positions,
+                                                RTCD_GLOBAL const rtcd_uint* triangles,
+                                                RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
   rtcd_uint k;
   for (k = 0; k < node.count; ++k) {
     rtcd_uint i = primitives[node.first + k];
@@ -142,8 +142,8 @@ RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_bvh_no
 }
 
 /* The nodes [n, end) of a subtree in depth-first order, no stack. */
-RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint n,
-                                          rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
+RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBAL const rtcd_bvh_node* nodes,
+                                          rtcd_uint n, rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
                                           RTCD_GLOBAL const rtcd_vec3* positions,
                                           RTCD_GLOBAL const rtcd_uint* triangles,
                                           RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
@@ -163,8 +163,7 @@ RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBA
 /* As rtcd_brute_first_hit, over the tree. */
 RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const rtcd_bvh_node* nodes,
                                         rtcd_uint node_count, RTCD_GLOBAL const rtcd_uint* primitives,
-                                        RTCD_GLOBAL const rtcd_vec3* positions,
-                                        RTCD_GLOBAL const rtcd_uint* triangles,
+                                        RTCD_GLOBAL const rtcd_vec3* positions, RTCD_GLOBAL const rtcd_uint* triangles,
                                         RTCD_GLOBAL const rtcd_uchar* zero_area, float t_max) {
   rtcd_slab_ray slabs = rtcd_make_slab_ray(ray);
   rtcd_hit best;
@@ -216,9 +215,11 @@ RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const r
 }
 
 /* A leaf's triangles against the nearest so far. */
-RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_nearest(rtcd_vec3 point, rtcd_bvh_node node, RTCD_GLOBAL const rtcd_uint* primitives,
-                                       RTCD_GLOBAL const rtcd_vec3* positions, RTCD_GLOBAL const rtcd_uint* triangles,
-                                       RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
+RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_nearest(rtcd_vec3 point, rtcd_bvh_node node,
+                                              RTCD_GLOBAL const rtcd_uint* primitives,
+                                              RTCD_GLOBAL const rtcd_vec3* positions,
+                                              RTCD_GLOBAL const rtcd_uint* triangles,
+                                              RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
   rtcd_uint k;
   for (k = 0; k < node.count; ++k) {
     rtcd_uint i = primitives[node.first + k];
@@ -240,8 +241,7 @@ RTCD_INLINE int rtcd_bvh_box_near(float d2, float best_d2) { return d2 * (1.0f -
 /* The nodes [n, end) of a subtree in depth-first order, no stack. */
 RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint n,
                                         rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
-                                        RTCD_GLOBAL const rtcd_vec3* positions,
-                                        RTCD_GLOBAL const rtcd_uint* triangles,
+                                        RTCD_GLOBAL const rtcd_vec3* positions, RTCD_GLOBAL const rtcd_uint* triangles,
                                         RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
   while (n < end) {
     rtcd_bvh_node node = nodes[n];
@@ -261,8 +261,7 @@ RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_
 RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, float enough,
                                       RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint node_count,
                                       RTCD_GLOBAL const rtcd_uint* primitives, RTCD_GLOBAL const rtcd_vec3* positions,
-                                      RTCD_GLOBAL const rtcd_uint* triangles,
-                                      RTCD_GLOBAL const rtcd_uchar* zero_area) {
+                                      RTCD_GLOBAL const rtcd_uint* triangles, RTCD_GLOBAL const rtcd_uchar* zero_area) {
   rtcd_int best = -1;
   float best_d2 = radius * radius, enough_d2 = enough > 0.0f ? enough * enough : -1.0f;
   rtcd_uint stack[RTCD_BVH_STACK];
