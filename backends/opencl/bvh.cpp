@@ -3,11 +3,14 @@
 #include <algorithm>
 #include <array>
 
+#include "rtcd/error.hpp"
+
 namespace rtcd {
 namespace {
 
 constexpr int kBins = 16;
 constexpr size_t kLeafSize = 2;  // at most this many triangles stop the split
+static_assert(kLeafSize < 4, "a wide node's leaf code holds counts below 4");
 
 struct Box {
   Eigen::Vector3f lo = Eigen::Vector3f::Constant(std::numeric_limits<float>::infinity());
@@ -125,6 +128,50 @@ class Builder {
   FlatBvh& out_;
 };
 
+float half_area(const rtcd_bvh_node& n) {
+  const rtcd_vec3 e = rtcd_sub(n.hi, n.lo);
+  return e.x * e.y + e.y * e.z + e.z * e.x;
+}
+
+// A wide node over the binary subtrees `slots`, opened (the inner one of
+// largest box replaced by its two children) until four, and its inner
+// children's wide nodes after it; returns its index.
+rtcd_int widen(FlatBvh& bvh, std::vector<rtcd_uint> slots) {
+  const auto& nodes = bvh.nodes;
+  while (slots.size() < 4) {
+    size_t open = slots.size();
+    for (size_t k = 0; k < slots.size(); ++k)
+      if (nodes[slots[k]].count == 0 &&
+          (open == slots.size() || half_area(nodes[slots[k]]) > half_area(nodes[slots[open]])))
+        open = k;
+    if (open == slots.size()) break;
+    const rtcd_uint n = slots[open];
+    slots[open] = n + 1;
+    slots.push_back(nodes[n + 1].escape);
+  }
+  const auto index = rtcd_int(bvh.wide.size());
+  bvh.wide.push_back({});
+  for (size_t k = 0; k < 4; ++k) {
+    rtcd_int child = RTCD_BVH_NO_CHILD;
+    rtcd_bvh_node box{};  // no child: a box at the origin, never visited
+    if (k < slots.size()) {
+      box = nodes[slots[k]];
+      child = box.count != 0 ? RTCD_BVH_LEAF(box.first, box.count)
+                             : widen(bvh, {slots[k] + 1, nodes[slots[k] + 1].escape});
+    }
+    rtcd_bvh_wide_node& w = bvh.wide[size_t(index)];  // the vector may have moved
+    w.lo_x[k] = box.lo.x;
+    w.lo_y[k] = box.lo.y;
+    w.lo_z[k] = box.lo.z;
+    w.hi_x[k] = box.hi.x;
+    w.hi_y[k] = box.hi.y;
+    w.hi_z[k] = box.hi.z;
+    w.child[k] = child;
+    w.subtree[k] = k < slots.size() ? slots[k] : 0;
+  }
+  return index;
+}
+
 }  // namespace
 
 FlatBvh build_flat_bvh(const Mesh& mesh) {
@@ -141,7 +188,12 @@ FlatBvh build_flat_bvh(const Mesh& mesh) {
   }
   bvh.nodes.reserve(2 * items.size());
   bvh.primitives.reserve(items.size());
-  if (!items.empty()) Builder(bvh).build(items, 0, items.size());
+  if (items.empty()) return bvh;
+  // Leaf codes hold first * 4 + count in an int.
+  if (items.size() >= (size_t(1) << 29))
+    throw Error("a mesh of " + std::to_string(items.size()) + " triangles: the BVH holds fewer than 2^29");
+  Builder(bvh).build(items, 0, items.size());
+  widen(bvh, {0});
   return bvh;
 }
 

@@ -1,6 +1,6 @@
 // The bounding-volume hierarchy the device traverses (kernel/bvh.h): built
-// once per mesh on the host with binned SAH, then flattened depth first
-// with escape links.
+// once per mesh on the host with binned SAH, flattened depth first with
+// escape links, and collapsed to four children a node.
 #pragma once
 
 #include <vector>
@@ -13,6 +13,7 @@ namespace rtcd {
 struct FlatBvh {
   std::vector<rtcd_bvh_node> nodes;  // depth first: a node, its first subtree, its second
   std::vector<rtcd_uint> primitives;  // triangle ids, each leaf a range
+  std::vector<rtcd_bvh_wide_node> wide;  // depth first from the root; empty when `nodes` is
 };
 
 FlatBvh build_flat_bvh(const Mesh& mesh);

@@ -15,6 +15,7 @@ typedef struct {
   rtcd_uint triangle_count;
   rtcd_uint first_node; /* BVH nodes */
   rtcd_uint node_count;
+  rtcd_uint first_wide;      /* the BVH's wide nodes */
   rtcd_uint first_primitive; /* the BVH's triangle list */
   rtcd_uint first_source;    /* ray origins and directions */
   rtcd_uint source_count;

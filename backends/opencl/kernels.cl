@@ -1,6 +1,6 @@
 /* The OpenCL executor's kernels. The per-ray work is the shared code of
  * core/include/rtcd/kernel (trace.h), run against this file's tracer: the
- * brute-force traversal, or the BVH (nearer child first) with -DRTCD_BVH. The build
+ * brute-force traversal, or the BVH (four children a node, nearer first) with -DRTCD_BVH. The build
  * inlines every #include (rtcd_embed_kernel), so the binary carries the
  * whole source. */
 #include "device_types.h"
@@ -22,6 +22,7 @@ typedef struct {
   __global const rtcd_uint* ring_first;
   __global const rtcd_int* ring;
   __global const rtcd_bvh_node* nodes;
+  __global const rtcd_bvh_wide_node* wide;
   __global const rtcd_uint* primitives;
   rtcd_uint triangle_count;
   rtcd_uint node_count;
@@ -29,8 +30,8 @@ typedef struct {
 
 RTCD_INLINE rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
 #ifdef RTCD_BVH
-  return rtcd_bvh_first_hit(ray, t->nodes, t->node_count, t->primitives, t->positions, t->triangles, t->zero_area,
-                            t_max);
+  return rtcd_bvh_first_hit(ray, t->nodes, t->node_count, t->wide, t->primitives, t->positions, t->triangles,
+                            t->zero_area, t_max);
 #else
   return rtcd_brute_first_hit(ray, t->positions, t->triangles, t->zero_area, t->triangle_count, t_max);
 #endif
@@ -40,8 +41,8 @@ RTCD_INLINE rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray*
  * stop sooner. */
 RTCD_INLINE rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius, float enough) {
 #ifdef RTCD_BVH
-  return rtcd_bvh_nearest(point, radius, enough, t->nodes, t->node_count, t->primitives, t->positions, t->triangles,
-                          t->zero_area);
+  return rtcd_bvh_nearest(point, radius, enough, t->nodes, t->node_count, t->wide, t->primitives, t->positions,
+                          t->triangles, t->zero_area);
 #else
   return rtcd_brute_nearest(point, radius, t->positions, t->triangles, t->zero_area, t->triangle_count);
 #endif
@@ -192,9 +193,11 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
                                               __global const rtcd_device_shape* shapes,
                                               __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                                               __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
-                                              __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
-                              __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
-                              __global const rtcd_bvh_node* nodes,
+                                              __global const rtcd_vec3* normals,
+                                              __global const rtcd_fold_face* fold_faces,
+                                              __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
+                                              __global const rtcd_bvh_node* nodes,
+                                              __global const rtcd_bvh_wide_node* wide,
                                               __global const rtcd_uint* primitives) {
   rtcd_trace_params p = jobs[c->job].params;
   rtcd_device_shape shape = shapes[jobs[c->job].target];
@@ -211,6 +214,7 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
     t.ring_first = ring_first + shape.first_triangle;
     t.ring = ring;
     t.nodes = nodes + shape.first_node;
+    t.wide = wide + shape.first_wide;
     t.primitives = primitives + shape.first_primitive;
     t.triangle_count = shape.triangle_count;
     t.node_count = shape.node_count;
@@ -234,8 +238,8 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
                          __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                          __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
                          __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
-                              __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
-                              __global const rtcd_bvh_node* nodes,
+                         __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
+                         __global const rtcd_bvh_node* nodes, __global const rtcd_bvh_wide_node* wide,
                          __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
                          __global const rtcd_uint* first_rays, rtcd_uint job_count,
                          __global rtcd_outcome* outcomes) {
@@ -243,8 +247,8 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
   rtcd_candidate c;
   if (i >= first_rays[job_count]) return;
   c = rays[i];
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces, ring_first, ring, nodes,
-                                     primitives);
+  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces,
+                                     ring_first, ring, nodes, wide, primitives);
 }
 
 #ifdef RTCD_HAS_DOUBLE
@@ -255,7 +259,8 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
                                __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
                                __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
                                __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
-                               __global const rtcd_bvh_node* nodes, __global const rtcd_uint* primitives,
+                               __global const rtcd_bvh_node* nodes, __global const rtcd_bvh_wide_node* wide,
+                               __global const rtcd_uint* primitives,
                                __global const rtcd_uint* first_items, __global const rtcd_frame* frames,
                                rtcd_uint job_count, rtcd_uint item_count, __global const rtcd_vec3* origins,
                                __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
@@ -270,7 +275,7 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
   flags[i] = (rtcd_uchar)flag;
   if (!flag) return;
   outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces,
-                                     ring_first, ring, nodes, primitives);
+                                     ring_first, ring, nodes, wide, primitives);
 }
 #endif
 

@@ -45,8 +45,8 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // The kernels read the buffers with OpenCL C's layout of the same structs:
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
 static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
-static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 52 && sizeof(rtcd_bvh_node) == 36);
-static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8);
+static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 128);
 
 constexpr size_t kGroupSize = 64;
 
@@ -59,8 +59,8 @@ struct GrowingBuffer {
 // Device::shapes by name, in upload order: the trace kernels take the
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
-  kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kPrimitives,
-  kOrigins, kDirections, kSourceLeaves
+  kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
+  kPrimitives, kOrigins, kDirections, kSourceLeaves
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -255,11 +255,11 @@ class OpenClExecutor final : public RayExecutor {
   void upload_shapes(Device& d) {
     if (d.shapes_uploaded == data_.table.size()) return;
     // In ShapeBuffer's order.
-    d.shapes = {upload_once(data_.table),     upload_once(data_.positions), upload_once(data_.triangles),
-                upload_once(data_.neighbors), upload_once(data_.zero_area), upload_once(data_.normals),
+    d.shapes = {upload_once(data_.table),      upload_once(data_.positions),  upload_once(data_.triangles),
+                upload_once(data_.neighbors),  upload_once(data_.zero_area),  upload_once(data_.normals),
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
-                upload_once(data_.nodes),     upload_once(data_.primitives), upload_once(data_.origins),
-                upload_once(data_.directions), upload_once(data_.source_leaves)};
+                upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
+                upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves)};
     d.shapes_uploaded = data_.table.size();
   }
 

@@ -9,6 +9,7 @@ void ShapeData::add(const Shape& shape, bool bvh) {
   d.first_vertex = rtcd_uint(positions.size());
   d.first_triangle = rtcd_uint(triangles.size() / 3);
   d.first_node = rtcd_uint(nodes.size());
+  d.first_wide = rtcd_uint(wide.size());
   d.first_primitive = rtcd_uint(primitives.size());
   d.first_source = rtcd_uint(origins.size());
   const RaySources& rs = shape.sources();
@@ -41,6 +42,7 @@ void ShapeData::add(const Shape& shape, bool bvh) {
       const FlatBvh tree = build_flat_bvh(*mesh);
       d.node_count = rtcd_uint(tree.nodes.size());
       nodes.insert(nodes.end(), tree.nodes.begin(), tree.nodes.end());
+      wide.insert(wide.end(), tree.wide.begin(), tree.wide.end());
       primitives.insert(primitives.end(), tree.primitives.begin(), tree.primitives.end());
     }
   } else if (const auto* sphere = std::get_if<Sphere>(&shape.geometry())) {

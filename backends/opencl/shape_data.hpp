@@ -23,6 +23,7 @@ struct ShapeData {
   std::vector<rtcd_int> neighbors;
   std::vector<rtcd_uchar> zero_area;
   std::vector<rtcd_bvh_node> nodes;
+  std::vector<rtcd_bvh_wide_node> wide;
 
   template <class T, class S>
   static void append(std::vector<T>& to, const S& from) {

@@ -16,27 +16,54 @@
 namespace rtcd::test {
 namespace {
 
-// The most nodes on a path from the root: how deep the traversal's stack
-// would grow with no limit.
-inline size_t bvh_depth(const FlatBvh& bvh, rtcd_uint n = 0) {
-  const rtcd_bvh_node& node = bvh.nodes[n];
-  if (node.count != 0) return 1;
-  return 1 + std::max(bvh_depth(bvh, n + 1), bvh_depth(bvh, bvh.nodes[n + 1].escape));
+// The most entries the traversal's stack would hold with no limit: a wide
+// node pushes up to three children (all but the nearest) before going on,
+// so three a level of the wide tree.
+inline size_t bvh_stack_needed(const FlatBvh& bvh, rtcd_int w = 0) {
+  size_t below = 0;
+  for (rtcd_int c : bvh.wide[size_t(w)].child)
+    if (c >= 0) below = std::max(below, bvh_stack_needed(bvh, c));
+  return 3 + below;
 }
 
-// Sets `deepest` to the deepest tree's depth: where it passes the
-// RTCD_BVH_STACK of the calling file, the traversal's escape-link path ran.
-inline void expect_bvh_answers_as_the_brute_force(size_t& deepest) {
-  deepest = 0;
+// The wide tree holds the binary tree's subtrees: each child's box is its
+// binary subtree's, and its leaves are the binary leaves, each once.
+inline void expect_wide_tree_of(const FlatBvh& bvh) {
+  std::vector<std::pair<rtcd_uint, rtcd_uint>> binary_leaves, wide_leaves;
+  for (const rtcd_bvh_node& n : bvh.nodes)
+    if (n.count != 0) binary_leaves.emplace_back(n.first, n.count);
+  for (const rtcd_bvh_wide_node& w : bvh.wide)
+    for (int k = 0; k < 4; ++k) {
+      if (w.child[k] == RTCD_BVH_NO_CHILD) continue;
+      const rtcd_bvh_node& n = bvh.nodes[w.subtree[k]];
+      EXPECT_EQ(w.lo_x[k], n.lo.x);
+      EXPECT_EQ(w.hi_z[k], n.hi.z);
+      if (w.child[k] <= -2) {
+        EXPECT_EQ(w.child[k], RTCD_BVH_LEAF(n.first, n.count)) << "a leaf's code names its binary leaf";
+        wide_leaves.emplace_back(n.first, n.count);
+      } else {
+        EXPECT_EQ(n.count, 0u) << "an inner child roots an inner binary subtree";
+      }
+    }
+  std::sort(binary_leaves.begin(), binary_leaves.end());
+  std::sort(wide_leaves.begin(), wide_leaves.end());
+  EXPECT_EQ(wide_leaves, binary_leaves);
+}
+
+// Sets `stack_needed` to the deepest tree's bvh_stack_needed: where it
+// passes the RTCD_BVH_STACK of the calling file, the escape-link path ran.
+inline void expect_bvh_answers_as_the_brute_force(size_t& stack_needed) {
+  stack_needed = 0;
   std::mt19937 g(5);
   std::uniform_real_distribution<float> u(-1.2f, 1.2f);
   for (const Mesh& mesh : {gen::concave_blob(902, 3), gen::torus(1.0, 0.3, 24, 12), gen::icosphere(1.0, 3)}) {
     const FlatBvh bvh = build_flat_bvh(mesh);
-    deepest = std::max(deepest, bvh_depth(bvh));
+    ASSERT_FALSE(bvh.wide.empty());
+    stack_needed = std::max(stack_needed, bvh_stack_needed(bvh));
+    expect_wide_tree_of(bvh);
     std::vector<int> seen(mesh.triangle_count(), 0);
     for (rtcd_uint t : bvh.primitives) ++seen[t];
     EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), long(mesh.triangle_count())) << "each triangle in one leaf";
-    ASSERT_FALSE(bvh.nodes.empty());
     EXPECT_EQ(bvh.nodes[0].escape, bvh.nodes.size());
     const auto* positions = reinterpret_cast<const rtcd_vec3*>(mesh.positions().data());
     const auto* triangles = reinterpret_cast<const rtcd_uint*>(mesh.triangles().data());
@@ -51,23 +78,23 @@ inline void expect_bvh_answers_as_the_brute_force(size_t& deepest) {
       d.normalize();
       const rtcd_ray ray = rtcd_make_ray(origin, rtcd_v3(d.x(), d.y(), d.z()));
       const float t_max = i % 2 ? 3.0e38f : 0.2f;
-      const rtcd_hit a = rtcd_bvh_first_hit(&ray, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.primitives.data(),
-                                            positions, triangles, zero_area, t_max);
+      const rtcd_hit a = rtcd_bvh_first_hit(&ray, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.wide.data(),
+                                            bvh.primitives.data(), positions, triangles, zero_area, t_max);
       const rtcd_hit b = rtcd_brute_first_hit(&ray, positions, triangles, zero_area, n, t_max);
       ASSERT_EQ(a.triangle, b.triangle) << "ray " << i;
       ASSERT_EQ(a.t, b.t) << "ray " << i;
       hits += b.triangle >= 0;
       const float radius = i % 3 ? 0.05f : 1.0f;
       const rtcd_int nearest = rtcd_brute_nearest(origin, radius, positions, triangles, zero_area, n);
-      ASSERT_EQ(rtcd_bvh_nearest(origin, radius, 0.0f, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()),
+      ASSERT_EQ(rtcd_bvh_nearest(origin, radius, 0.0f, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.wide.data(),
                                  bvh.primitives.data(), positions, triangles, zero_area),
                 nearest)
           << "point " << i;
       // Stopping within `enough`: any triangle that near, else the nearest.
       const float enough = 0.5f * radius;
-      const rtcd_int near_enough = rtcd_bvh_nearest(origin, radius, enough, bvh.nodes.data(),
-                                                    rtcd_uint(bvh.nodes.size()), bvh.primitives.data(), positions,
-                                                    triangles, zero_area);
+      const rtcd_int near_enough =
+          rtcd_bvh_nearest(origin, radius, enough, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.wide.data(),
+                           bvh.primitives.data(), positions, triangles, zero_area);
       const auto distance2 = [&](rtcd_int t) {
         return rtcd_point_triangle_distance2(origin, positions[triangles[3 * t]], positions[triangles[3 * t + 1]],
                                              positions[triangles[3 * t + 2]]);

@@ -177,9 +177,9 @@ TEST(OpenCl, CertifiedPairsEqualBasic) {
 // The device's BVH traversal is plain C: checked on the host against the
 // brute force (bvh_answers.hpp), with the device's stack.
 TEST(Bvh, AnswersAsTheBruteForce) {
-  size_t deepest = 0;
-  expect_bvh_answers_as_the_brute_force(deepest);
-  EXPECT_LE(deepest, size_t(RTCD_BVH_STACK)) << "trees deeper than the device's stack";
+  size_t stack_needed = 0;
+  expect_bvh_answers_as_the_brute_force(stack_needed);
+  EXPECT_LE(stack_needed, size_t(RTCD_BVH_STACK)) << "trees deeper than the device's stack";
 }
 
 // Against the exact reference, on the 20,000-triangle family as well.
@@ -311,7 +311,9 @@ TEST(OpenCl, StepsWaitOnce) {
       EXPECT_EQ(steps[s].stats.devices[0].waits, 1u) << "step " << s;
       both += steps[s].stats.pairs_full > 0 && steps[s].stats.pairs_iterative > 0;
     }
-    if (mode == Mode::automatic) EXPECT_GT(both, 0u) << "no step had both batches: the test shows nothing";
+    if (mode == Mode::automatic) {
+      EXPECT_GT(both, 0u) << "no step had both batches: the test shows nothing";
+    }
   }
 }
 

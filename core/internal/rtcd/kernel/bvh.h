@@ -1,6 +1,9 @@
-/* Traversal of a bounding-volume hierarchy flattened depth first: a node's
- * first child is the next node, and `escape` is the node after its subtree
- * (for a first child, its sibling). The answers follow the tie rules of
+/* Traversal of a bounding-volume hierarchy, binary and flattened depth
+ * first (a node's first child is the next node, and `escape` is the node
+ * after its subtree: for a first child, its sibling), and the same tree
+ * collapsed to four children a node, whose boxes are tested together. The
+ * wide tree is the one traversed; the binary one serves where the stack
+ * runs out. The answers follow the tie rules of
  * tracer.h whatever the tree and the visiting order: boxes are pruned only
  * when they cannot hold a hit as near as the best one, with margins wider
  * than the rounding of the box tests. */
@@ -16,6 +19,18 @@ typedef struct {
   rtcd_uint first;  /* leaves: first entry in the primitive list */
   rtcd_uint count;  /* leaves: number of triangles; 0: an inner node, its first child next */
 } rtcd_bvh_node;
+
+/* A wide node: up to four children, their boxes by axis so that one slab
+ * test covers all four. A child is another wide node (>= 0), none (-1), or
+ * a leaf, -2 - (first * 4 + count): `first` in the primitive list, count <
+ * 4. `subtree` is the binary node rooting the child's subtree. */
+typedef struct {
+  float lo_x[4], lo_y[4], lo_z[4], hi_x[4], hi_y[4], hi_z[4];
+  rtcd_int child[4];
+  rtcd_uint subtree[4];
+} rtcd_bvh_wide_node;
+#define RTCD_BVH_NO_CHILD (-1)
+#define RTCD_BVH_LEAF(first, count) (-2 - (rtcd_int)((first) * 4u + (count)))
 
 /* Relative margin on box distances: a few hundred float ulps, far more than
  * the box tests round. */
@@ -115,21 +130,88 @@ RTCD_ALWAYS_INLINE float rtcd_box_distance2(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3
  * entry distance (a ray's t, a point's squared distance), so a subtree
  * pushed before a nearer hit was found is dropped when popped. Pruning with
  * the best so far is the same test whenever it runs, so the order changes
- * the work, not the answer. A deeper tree than the stack goes on in the
- * subtree's own depth-first order, by escape links. */
+ * the work, not the answer. Past a full stack, a subtree is traversed at
+ * once, in its own depth-first order by the binary tree's escape links. */
 #ifndef RTCD_BVH_STACK
 #define RTCD_BVH_STACK 32
 #endif
 
+/* A wide node's four child boxes against the ray, each entry as
+ * rtcd_slab_entry's (-1: missed, or no child); OpenCL tests the four at
+ * once. */
+RTCD_ALWAYS_INLINE void rtcd_slab_entries4(const rtcd_slab_ray* s, RTCD_GLOBAL const rtcd_bvh_wide_node* node,
+                                           float t_max, float* entry) {
+  int k;
+#ifdef __OPENCL_C_VERSION__
+  if (!s->divide) {
+    rtcd_vec3 o = s->ray->origin, inv = s->inverse;
+    float4 x0 = (vload4(0, node->lo_x) - o.x) * inv.x, x1 = (vload4(0, node->hi_x) - o.x) * inv.x;
+    float4 y0 = (vload4(0, node->lo_y) - o.y) * inv.y, y1 = (vload4(0, node->hi_y) - o.y) * inv.y;
+    float4 z0 = (vload4(0, node->lo_z) - o.z) * inv.z, z1 = (vload4(0, node->hi_z) - o.z) * inv.z;
+    float4 a = RTCD_MAX(RTCD_MAX(RTCD_MIN(x0, x1), RTCD_MIN(y0, y1)), RTCD_MAX(RTCD_MIN(z0, z1), (float4)(0.0f)));
+    float4 b = RTCD_MIN(RTCD_MAX(x0, x1), RTCD_MIN(RTCD_MAX(y0, y1), RTCD_MAX(z0, z1)));
+    a -= a * RTCD_BVH_MARGIN;
+    b += fabs(b) * RTCD_BVH_MARGIN;
+    b = RTCD_MIN(b, (float4)(t_max));
+    vstore4(select((float4)(-1.0f), a, (a <= b) & (vload4(0, node->child) != (int4)(RTCD_BVH_NO_CHILD))), 0, entry);
+    return;
+  }
+#endif
+  for (k = 0; k < 4; ++k)
+    entry[k] = node->child[k] == RTCD_BVH_NO_CHILD
+                   ? -1.0f
+                   : rtcd_slab_entry(s, rtcd_v3(node->lo_x[k], node->lo_y[k], node->lo_z[k]),
+                                     rtcd_v3(node->hi_x[k], node->hi_y[k], node->hi_z[k]), t_max);
+}
+
+/* Whether a box at squared distance d2 may hold a triangle as near as the
+ * best: the margin keeps ties. */
+RTCD_INLINE int rtcd_bvh_box_near(float d2, float best_d2) { return d2 * (1.0f - RTCD_BVH_MARGIN) <= best_d2; }
+
+/* A wide node's four child boxes: squared distances from the point, as
+ * rtcd_box_distance2's (-1: too far for the best, or no child); OpenCL
+ * measures the four at once. */
+RTCD_ALWAYS_INLINE void rtcd_box_near4(rtcd_vec3 p, RTCD_GLOBAL const rtcd_bvh_wide_node* node, float best_d2,
+                                       float* d2) {
+#ifdef __OPENCL_C_VERSION__
+  float4 dx = RTCD_MAX(RTCD_MAX(vload4(0, node->lo_x) - p.x, p.x - vload4(0, node->hi_x)), (float4)(0.0f));
+  float4 dy = RTCD_MAX(RTCD_MAX(vload4(0, node->lo_y) - p.y, p.y - vload4(0, node->hi_y)), (float4)(0.0f));
+  float4 dz = RTCD_MAX(RTCD_MAX(vload4(0, node->lo_z) - p.z, p.z - vload4(0, node->hi_z)), (float4)(0.0f));
+  float4 d = dx * dx + dy * dy + dz * dz;
+  vstore4(select((float4)(-1.0f), d,
+                 (d * (1.0f - RTCD_BVH_MARGIN) <= best_d2) & (vload4(0, node->child) != (int4)(RTCD_BVH_NO_CHILD))),
+          0, d2);
+#else
+  int k;
+  for (k = 0; k < 4; ++k) {
+    d2[k] = rtcd_box_distance2(p, rtcd_v3(node->lo_x[k], node->lo_y[k], node->lo_z[k]),
+                               rtcd_v3(node->hi_x[k], node->hi_y[k], node->hi_z[k]));
+    if (node->child[k] == RTCD_BVH_NO_CHILD || !rtcd_bvh_box_near(d2[k], best_d2)) d2[k] = -1.0f;
+  }
+#endif
+}
+
+/* The children to visit (key >= 0), nearest first; returns how many. */
+RTCD_ALWAYS_INLINE int rtcd_bvh_order(const float* key, int* order) {
+  int hits = 0, k, h;
+  for (k = 0; k < 4; ++k) {
+    if (key[k] < 0.0f) continue;
+    for (h = hits; h > 0 && key[order[h - 1]] > key[k]; --h) order[h] = order[h - 1];
+    order[h] = k;
+    ++hits;
+  }
+  return hits;
+}
+
 /* A leaf's triangles against the best hit so far. */
-RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_bvh_node node,
+RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_uint first, rtcd_uint count,
                                                 RTCD_GLOBAL const rtcd_uint* primitives,
                                                 RTCD_GLOBAL const rtcd_vec3* positions,
                                                 RTCD_GLOBAL const rtcd_uint* triangles,
                                                 RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
   rtcd_uint k;
-  for (k = 0; k < node.count; ++k) {
-    rtcd_uint i = primitives[node.first + k];
+  for (k = 0; k < count; ++k) {
+    rtcd_uint i = primitives[first + k];
     float t;
     if (zero_area[i]) continue;
     t = rtcd_hit_distance(ray, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
@@ -141,7 +223,7 @@ RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_bvh_no
   }
 }
 
-/* The nodes [n, end) of a subtree in depth-first order, no stack. */
+/* The binary nodes [n, end) of a subtree in depth-first order, no stack. */
 RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBAL const rtcd_bvh_node* nodes,
                                           rtcd_uint n, rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
                                           RTCD_GLOBAL const rtcd_vec3* positions,
@@ -154,75 +236,75 @@ RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBA
     } else if (node.count == 0) {
       n += 1;
     } else {
-      rtcd_bvh_leaf_first_hit(slabs->ray, node, primitives, positions, triangles, zero_area, best);
+      rtcd_bvh_leaf_first_hit(slabs->ray, node.first, node.count, primitives, positions, triangles, zero_area, best);
       n = node.escape;
     }
   }
 }
 
-/* As rtcd_brute_first_hit, over the tree. */
+/* As rtcd_brute_first_hit, over the wide tree. */
 RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const rtcd_bvh_node* nodes,
-                                        rtcd_uint node_count, RTCD_GLOBAL const rtcd_uint* primitives,
-                                        RTCD_GLOBAL const rtcd_vec3* positions, RTCD_GLOBAL const rtcd_uint* triangles,
-                                        RTCD_GLOBAL const rtcd_uchar* zero_area, float t_max) {
+                                        rtcd_uint node_count, RTCD_GLOBAL const rtcd_bvh_wide_node* wide,
+                                        RTCD_GLOBAL const rtcd_uint* primitives, RTCD_GLOBAL const rtcd_vec3* positions,
+                                        RTCD_GLOBAL const rtcd_uint* triangles, RTCD_GLOBAL const rtcd_uchar* zero_area,
+                                        float t_max) {
   rtcd_slab_ray slabs = rtcd_make_slab_ray(ray);
   rtcd_hit best;
-  rtcd_uint stack[RTCD_BVH_STACK];
+  rtcd_int stack[RTCD_BVH_STACK];
   float entry[RTCD_BVH_STACK];
-  int top = 0;
+  int top = 1;
   best.triangle = -1;
   best.t = t_max;
   if (node_count == 0) return best;
-  entry[0] = rtcd_slab_entry(&slabs, nodes[0].lo, nodes[0].hi, best.t);
-  stack[0] = 0;
-  top = entry[0] < 0.0f ? 0 : 1;
+  stack[0] = 0; /* the root: its children's boxes are tested */
+  entry[0] = 0.0f;
   while (top > 0) {
-    rtcd_uint n;
-    rtcd_bvh_node node;
+    rtcd_int code;
     --top;
     if (entry[top] > best.t) continue;
-    n = stack[top];
-    node = nodes[n];
-    while (node.count == 0) { /* an inner node whose box the ray meets: its nearer child next */
-      rtcd_uint a = n + 1, b = nodes[a].escape, swap_node;
-      float ta = rtcd_slab_entry(&slabs, nodes[a].lo, nodes[a].hi, best.t);
-      float tb = rtcd_slab_entry(&slabs, nodes[b].lo, nodes[b].hi, best.t), swap_t;
-      if (tb >= 0.0f && (ta < 0.0f || tb < ta)) {
-        swap_node = a;
-        a = b;
-        b = swap_node;
-        swap_t = ta;
-        ta = tb;
-        tb = swap_t;
-      }
-      if (ta < 0.0f) break;
-      if (tb >= 0.0f) {
+    code = stack[top];
+    while (code >= 0) { /* a wide node: the children the ray meets, the nearest next */
+      RTCD_GLOBAL const rtcd_bvh_wide_node* node = wide + code;
+      float t[4];
+      int order[4], hits, h, k;
+      rtcd_slab_entries4(&slabs, node, best.t, t);
+      hits = rtcd_bvh_order(t, order);
+      code = RTCD_BVH_NO_CHILD;
+      if (hits == 0) break;
+      for (h = hits - 1; h > 0; --h) {
+        rtcd_int c;
+        k = order[h];
+        c = node->child[k];
         if (top < RTCD_BVH_STACK) {
-          stack[top] = b;
-          entry[top] = tb;
+          stack[top] = c;
+          entry[top] = t[k];
           ++top;
+        } else if (c >= 0) {
+          rtcd_bvh_range_first_hit(&slabs, nodes, node->subtree[k], nodes[node->subtree[k]].escape, primitives,
+                                   positions, triangles, zero_area, &best);
         } else {
-          rtcd_bvh_range_first_hit(&slabs, nodes, b, nodes[b].escape, primitives, positions, triangles, zero_area,
-                                   &best);
+          rtcd_bvh_leaf_first_hit(ray, (rtcd_uint)(-2 - c) / 4u, (rtcd_uint)(-2 - c) % 4u, primitives, positions,
+                                  triangles, zero_area, &best);
         }
       }
-      n = a;
-      node = nodes[a];
+      code = node->child[order[0]];
     }
-    if (node.count != 0) rtcd_bvh_leaf_first_hit(ray, node, primitives, positions, triangles, zero_area, &best);
+    if (code <= -2)
+      rtcd_bvh_leaf_first_hit(ray, (rtcd_uint)(-2 - code) / 4u, (rtcd_uint)(-2 - code) % 4u, primitives, positions,
+                              triangles, zero_area, &best);
   }
   return best;
 }
 
 /* A leaf's triangles against the nearest so far. */
-RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_nearest(rtcd_vec3 point, rtcd_bvh_node node,
+RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_nearest(rtcd_vec3 point, rtcd_uint first, rtcd_uint count,
                                               RTCD_GLOBAL const rtcd_uint* primitives,
                                               RTCD_GLOBAL const rtcd_vec3* positions,
                                               RTCD_GLOBAL const rtcd_uint* triangles,
                                               RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
   rtcd_uint k;
-  for (k = 0; k < node.count; ++k) {
-    rtcd_uint i = primitives[node.first + k];
+  for (k = 0; k < count; ++k) {
+    rtcd_uint i = primitives[first + k];
     float d2;
     if (zero_area[i]) continue;
     d2 = rtcd_point_triangle_distance2(point, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
@@ -234,11 +316,7 @@ RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_nearest(rtcd_vec3 point, rtcd_bvh_node nod
   }
 }
 
-/* Whether a box at squared distance d2 may hold a triangle as near as the
- * best: the margin keeps ties. */
-RTCD_INLINE int rtcd_bvh_box_near(float d2, float best_d2) { return d2 * (1.0f - RTCD_BVH_MARGIN) <= best_d2; }
-
-/* The nodes [n, end) of a subtree in depth-first order, no stack. */
+/* The binary nodes [n, end) of a subtree in depth-first order, no stack. */
 RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint n,
                                         rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
                                         RTCD_GLOBAL const rtcd_vec3* positions, RTCD_GLOBAL const rtcd_uint* triangles,
@@ -250,62 +328,61 @@ RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_
     } else if (node.count == 0) {
       n += 1;
     } else {
-      rtcd_bvh_leaf_nearest(point, node, primitives, positions, triangles, zero_area, best, best_d2);
+      rtcd_bvh_leaf_nearest(point, node.first, node.count, primitives, positions, triangles, zero_area, best, best_d2);
       n = node.escape;
     }
   }
 }
 
-/* As rtcd_brute_nearest, over the tree; or, when enough > 0, the first
- * triangle found within enough of the point (tracer.h's contract). */
+/* As rtcd_brute_nearest, over the wide tree; or, when enough > 0, the
+ * first triangle found within enough of the point (tracer.h's contract). */
 RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, float enough,
                                       RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint node_count,
+                                      RTCD_GLOBAL const rtcd_bvh_wide_node* wide,
                                       RTCD_GLOBAL const rtcd_uint* primitives, RTCD_GLOBAL const rtcd_vec3* positions,
                                       RTCD_GLOBAL const rtcd_uint* triangles, RTCD_GLOBAL const rtcd_uchar* zero_area) {
   rtcd_int best = -1;
   float best_d2 = radius * radius, enough_d2 = enough > 0.0f ? enough * enough : -1.0f;
-  rtcd_uint stack[RTCD_BVH_STACK];
+  rtcd_int stack[RTCD_BVH_STACK];
   float distance2[RTCD_BVH_STACK];
-  int top = 0;
+  int top = 1;
   if (node_count == 0) return best;
-  distance2[0] = rtcd_box_distance2(point, nodes[0].lo, nodes[0].hi);
-  stack[0] = 0;
-  top = rtcd_bvh_box_near(distance2[0], best_d2) ? 1 : 0;
+  stack[0] = 0; /* the root: its children's boxes are measured */
+  distance2[0] = 0.0f;
   while (top > 0) {
-    rtcd_uint n;
-    rtcd_bvh_node node;
+    rtcd_int code;
     --top;
     if (!rtcd_bvh_box_near(distance2[top], best_d2)) continue;
-    n = stack[top];
-    node = nodes[n];
-    while (node.count == 0) { /* an inner node whose box may hold the nearest: its nearer child next */
-      rtcd_uint a = n + 1, b = nodes[a].escape, swap_node;
-      float da = rtcd_box_distance2(point, nodes[a].lo, nodes[a].hi);
-      float db = rtcd_box_distance2(point, nodes[b].lo, nodes[b].hi), swap_d2;
-      if (db < da) {
-        swap_node = a;
-        a = b;
-        b = swap_node;
-        swap_d2 = da;
-        da = db;
-        db = swap_d2;
-      }
-      if (!rtcd_bvh_box_near(da, best_d2)) break;
-      if (rtcd_bvh_box_near(db, best_d2)) {
+    code = stack[top];
+    while (code >= 0) { /* a wide node: the children that may hold the nearest, the nearest next */
+      RTCD_GLOBAL const rtcd_bvh_wide_node* node = wide + code;
+      float d2[4];
+      int order[4], hits, h, k;
+      rtcd_box_near4(point, node, best_d2, d2);
+      hits = rtcd_bvh_order(d2, order);
+      code = RTCD_BVH_NO_CHILD;
+      if (hits == 0) break;
+      for (h = hits - 1; h > 0; --h) {
+        rtcd_int c;
+        k = order[h];
+        c = node->child[k];
         if (top < RTCD_BVH_STACK) {
-          stack[top] = b;
-          distance2[top] = db;
+          stack[top] = c;
+          distance2[top] = d2[k];
           ++top;
+        } else if (c >= 0) {
+          rtcd_bvh_range_nearest(point, nodes, node->subtree[k], nodes[node->subtree[k]].escape, primitives, positions,
+                                 triangles, zero_area, &best, &best_d2);
         } else {
-          rtcd_bvh_range_nearest(point, nodes, b, nodes[b].escape, primitives, positions, triangles, zero_area, &best,
-                                 &best_d2);
+          rtcd_bvh_leaf_nearest(point, (rtcd_uint)(-2 - c) / 4u, (rtcd_uint)(-2 - c) % 4u, primitives, positions,
+                                triangles, zero_area, &best, &best_d2);
         }
       }
-      n = a;
-      node = nodes[a];
+      code = node->child[order[0]];
     }
-    if (node.count != 0) {
-      rtcd_bvh_leaf_nearest(point, node, primitives, positions, triangles, zero_area, &best, &best_d2);
+    if (code <= -2) {
+      rtcd_bvh_leaf_nearest(point, (rtcd_uint)(-2 - code) / 4u, (rtcd_uint)(-2 - code) % 4u, primitives, positions,
+                            triangles, zero_area, &best, &best_d2);
       if (best_d2 <= enough_d2) break;
     }
   }
