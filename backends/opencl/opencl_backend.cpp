@@ -568,15 +568,12 @@ class OpenClExecutor final : public RayExecutor {
     keep(d, lane, lane.first_items, lane.items);
   }
 
-  // The flagged items' outcomes, in item order, which is ray order.
+  // Each job's rays, its flagged items (deliver copies their outcomes).
   static void finish_grid(Lane& lane) {
-    uint32_t n = 0;
     for (size_t l = 0; l < lane.host_jobs.size(); ++l) {
       const rtcd_device_job& job = lane.host_jobs[l];
-      const uint32_t first = n;
-      for (uint32_t i = job.first_item; i < job.first_item + job.item_count; ++i)
-        if (lane.host_flags[i]) lane.host_outcomes[n++] = lane.host_outcomes[i];
-      lane.host_counts[l] = n - first;
+      const rtcd_uchar* flags = lane.host_flags.data() + job.first_item;
+      lane.host_counts[l] = uint32_t(std::count_if(flags, flags + job.item_count, [](rtcd_uchar f) { return f != 0; }));
     }
     first_rays(lane);
   }
@@ -784,8 +781,16 @@ class OpenClExecutor final : public RayExecutor {
         if (job.residence)
           *job.residence = {runtime_->place_on_device ? step_ : 0, i,
                             lane.kept_base + (grid(lane) ? lane.host_first_items[l] : lane.host_first_rays[l]), true};
-        const rtcd_outcome* first = lane.host_outcomes.data() + lane.host_first_rays[l];
-        out.assign(first, first + lane.host_counts[l]);
+        if (grid(lane)) {  // the flagged items' outcomes, in item order, which is ray order
+          const rtcd_device_job& dj = lane.host_jobs[l];
+          out.clear();
+          out.reserve(lane.host_counts[l]);
+          for (uint32_t i = dj.first_item; i < dj.first_item + dj.item_count; ++i)
+            if (lane.host_flags[i]) out.push_back(lane.host_outcomes[i]);
+        } else {
+          const rtcd_outcome* first = lane.host_outcomes.data() + lane.host_first_rays[l];
+          out.assign(first, first + lane.host_counts[l]);
+        }
         d.work.rays += lane.host_counts[l];
       }
       batch.tallies[j] = settle_outcomes(out, job.iterative);
