@@ -134,11 +134,11 @@ float half_area(const rtcd_bvh_node& n) {
 }
 
 // A wide node over the binary subtrees `slots`, opened (the inner one of
-// largest box replaced by its two children) until four, and its inner
+// largest box replaced by its two children) until RTCD_BVH_WIDTH, and its inner
 // children's wide nodes after it; returns its index.
 rtcd_int widen(FlatBvh& bvh, std::vector<rtcd_uint> slots) {
   const auto& nodes = bvh.nodes;
-  while (slots.size() < 4) {
+  while (slots.size() < RTCD_BVH_WIDTH) {
     size_t open = slots.size();
     for (size_t k = 0; k < slots.size(); ++k)
       if (nodes[slots[k]].count == 0 &&
@@ -151,7 +151,7 @@ rtcd_int widen(FlatBvh& bvh, std::vector<rtcd_uint> slots) {
   }
   const auto index = rtcd_int(bvh.wide.size());
   bvh.wide.push_back({});
-  for (size_t k = 0; k < 4; ++k) {
+  for (size_t k = 0; k < RTCD_BVH_WIDTH; ++k) {
     rtcd_int child = RTCD_BVH_NO_CHILD;
     rtcd_bvh_node box{};  // no child: a box at the origin, never visited
     if (k < slots.size()) {

@@ -1,6 +1,6 @@
 // The bounding-volume hierarchy the device traverses (kernel/bvh.h): built
 // once per mesh on the host with binned SAH, flattened depth first with
-// escape links, and collapsed to four children a node.
+// escape links, and collapsed to RTCD_BVH_WIDTH children a node.
 #pragma once
 
 #include <vector>

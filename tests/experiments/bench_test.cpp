@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <set>
 #include <sstream>
 #include <unistd.h>
 
@@ -205,6 +207,55 @@ TEST(Replay, EveryEngineSeesTheSameStepsAndTheTracersAgree) {
   EXPECT_GT(deep, 0u);
   EXPECT_GT(colliding_steps, 3u);
   EXPECT_EQ(runs[3].engine_name, "bullet-gimpact");
+}
+
+// Blobs dropped from staggered heights that land, bounce and roll apart:
+// pairs join the broad phase's set and leave it all along the run.
+const char* kTumble = R"({
+  "time_step": 0.016666666666666666, "steps": 200, "seed": 9,
+  "effects": ["gravity", "contacts", "friction", "predictive", "projected"],
+  "narrow_phase": {"distance_extension": 0.05, "displacement_threshold": 0.02},
+  "bodies": [{"blob": {"triangles": 200, "seed": 5, "radius": 0.25}, "count": 16,
+              "grid": {"cells": [4, 2, 2], "origin": [-0.78, -0.26, 0.3], "spacing": [0.52, 0.52, 0.6],
+                       "random_orientation": true}}]
+})";
+
+// Issue floor: on two devices, a pair runs on one device from the step it
+// joins the broad phase's set until it leaves it, over 200 recorded steps
+// in which pairs come and go (a pair that leaves and comes back may move).
+TEST(Replay, OpenClPairsKeepTheirDeviceWhileInTheBroadPhase) {
+  TempDir dir;
+  const sim::Recording r = sim::Recording::read(record(dir, kTumble));
+  ASSERT_EQ(r.steps().size(), 200u);
+  std::map<uint64_t, int32_t> device, present;  // by pair_key: its device while it stays; this step's pairs
+  std::set<int32_t> used;
+  size_t stayed = 0, joined_later = 0, left = 0, on_cpu = 0;
+  experiments::ReplayOptions options;
+  options.observe = [&](uint64_t step, const StepResult& result) {
+    present.clear();
+    on_cpu += !result.stats.cpu_fallback.empty();
+    for (const PairResult& p : result.pairs) {
+      const uint64_t key = pair_key(p.pair.a, p.pair.b);
+      const auto before = device.find(key);
+      if (before == device.end()) {
+        joined_later += step > 0;
+        present[key] = p.device;
+        continue;
+      }
+      ++stayed;
+      EXPECT_EQ(p.device, before->second) << "step " << step << ", bodies " << p.pair.a << " and " << p.pair.b;
+      present[key] = before->second;
+    }
+    for (const auto& [pair, d] : device) left += !present.count(pair);
+    for (const auto& [pair, d] : present) used.insert(d);
+    device.swap(present);
+  };
+  experiments::replay(r, {ours("opencl", Mode::automatic)}, options);
+  EXPECT_EQ(on_cpu, 0u) << "steps ran on the CPU fallback: no device to keep";
+  EXPECT_EQ(used, (std::set<int32_t>{0, 1})) << "the pairs did not spread over both devices";
+  EXPECT_GT(stayed, 500u);
+  EXPECT_GT(joined_later, 5u) << "few pairs joined during the run: the test shows little";
+  EXPECT_GT(left, 10u) << "few pairs left during the run: the test shows little";
 }
 
 TEST(Replay, StatefulConfigurationsAreNeverSampled) {

@@ -17,13 +17,13 @@ namespace rtcd::test {
 namespace {
 
 // The most entries the traversal's stack would hold with no limit: a wide
-// node pushes up to three children (all but the nearest) before going on,
-// so three a level of the wide tree.
+// node pushes all its children but the nearest before going on, so
+// RTCD_BVH_WIDTH - 1 a level of the wide tree.
 inline size_t bvh_stack_needed(const FlatBvh& bvh, rtcd_int w = 0) {
   size_t below = 0;
   for (rtcd_int c : bvh.wide[size_t(w)].child)
     if (c >= 0) below = std::max(below, bvh_stack_needed(bvh, c));
-  return 3 + below;
+  return RTCD_BVH_WIDTH - 1 + below;
 }
 
 // The wide tree holds the binary tree's subtrees: each child's box is its
@@ -33,7 +33,7 @@ inline void expect_wide_tree_of(const FlatBvh& bvh) {
   for (const rtcd_bvh_node& n : bvh.nodes)
     if (n.count != 0) binary_leaves.emplace_back(n.first, n.count);
   for (const rtcd_bvh_wide_node& w : bvh.wide)
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; k < RTCD_BVH_WIDTH; ++k) {
       if (w.child[k] == RTCD_BVH_NO_CHILD) continue;
       const rtcd_bvh_node& n = bvh.nodes[w.subtree[k]];
       EXPECT_EQ(w.lo_x[k], n.lo.x);

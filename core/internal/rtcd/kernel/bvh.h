@@ -1,12 +1,12 @@
 /* Traversal of a bounding-volume hierarchy, binary and flattened depth
  * first (a node's first child is the next node, and `escape` is the node
  * after its subtree: for a first child, its sibling), and the same tree
- * collapsed to four children a node, whose boxes are tested together. The
- * wide tree is the one traversed; the binary one serves where the stack
- * runs out. The answers follow the tie rules of
- * tracer.h whatever the tree and the visiting order: boxes are pruned only
- * when they cannot hold a hit as near as the best one, with margins wider
- * than the rounding of the box tests. */
+ * collapsed to RTCD_BVH_WIDTH children a node, whose boxes are tested
+ * together. The wide tree is the one traversed; the binary one serves
+ * where the stack runs out. The answers follow the tie rules of tracer.h
+ * whatever the tree and the visiting order: boxes are pruned only when
+ * they cannot hold a hit as near as the best one, with margins wider than
+ * the rounding of the box tests. */
 #ifndef RTCD_KERNEL_BVH_H
 #define RTCD_KERNEL_BVH_H
 
@@ -20,15 +20,33 @@ typedef struct {
   rtcd_uint count;  /* leaves: number of triangles; 0: an inner node, its first child next */
 } rtcd_bvh_node;
 
-/* A wide node: up to four children, their boxes by axis so that one slab
- * test covers all four. A child is another wide node (>= 0), none (-1), or
- * a leaf, -2 - (first * 4 + count): `first` in the primitive list, count <
- * 4. `subtree` is the binary node rooting the child's subtree. */
+/* A wide node: up to RTCD_BVH_WIDTH children, their boxes by axis so that
+ * one slab test covers them all. A child is another wide node (>= 0), none
+ * (-1), or a leaf, -2 - (first * 4 + count): `first` in the primitive
+ * list, count < 4. `subtree` is the binary node rooting the child's
+ * subtree. The host's builder and the kernels read the same width. */
+#define RTCD_BVH_WIDTH 4
 typedef struct {
-  float lo_x[4], lo_y[4], lo_z[4], hi_x[4], hi_y[4], hi_z[4];
-  rtcd_int child[4];
-  rtcd_uint subtree[4];
+  float lo_x[RTCD_BVH_WIDTH], lo_y[RTCD_BVH_WIDTH], lo_z[RTCD_BVH_WIDTH];
+  float hi_x[RTCD_BVH_WIDTH], hi_y[RTCD_BVH_WIDTH], hi_z[RTCD_BVH_WIDTH];
+  rtcd_int child[RTCD_BVH_WIDTH];
+  rtcd_uint subtree[RTCD_BVH_WIDTH];
 } rtcd_bvh_wide_node;
+
+#ifdef __OPENCL_C_VERSION__
+/* OpenCL's vectors of a wide node's width. */
+#if RTCD_BVH_WIDTH == 8
+typedef float8 rtcd_floatw;
+typedef int8 rtcd_intw;
+#define RTCD_VLOADW vload8
+#define RTCD_VSTOREW vstore8
+#else
+typedef float4 rtcd_floatw;
+typedef int4 rtcd_intw;
+#define RTCD_VLOADW vload4
+#define RTCD_VSTOREW vstore4
+#endif
+#endif
 #define RTCD_BVH_NO_CHILD (-1)
 #define RTCD_BVH_LEAF(first, count) (-2 - (rtcd_int)((first) * 4u + (count)))
 
@@ -136,28 +154,28 @@ RTCD_ALWAYS_INLINE float rtcd_box_distance2(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3
 #define RTCD_BVH_STACK 32
 #endif
 
-/* A wide node's four child boxes against the ray, each entry as
- * rtcd_slab_entry's (-1: missed, or no child); OpenCL tests the four at
+/* A wide node's child boxes against the ray, each entry as
+ * rtcd_slab_entry's (-1: missed, or no child); OpenCL tests them all at
  * once. */
-RTCD_ALWAYS_INLINE void rtcd_slab_entries4(const rtcd_slab_ray* s, RTCD_GLOBAL const rtcd_bvh_wide_node* node,
+RTCD_ALWAYS_INLINE void rtcd_slab_entries_wide(const rtcd_slab_ray* s, RTCD_GLOBAL const rtcd_bvh_wide_node* node,
                                            float t_max, float* entry) {
   int k;
 #ifdef __OPENCL_C_VERSION__
   if (!s->divide) {
     rtcd_vec3 o = s->ray->origin, inv = s->inverse;
-    float4 x0 = (vload4(0, node->lo_x) - o.x) * inv.x, x1 = (vload4(0, node->hi_x) - o.x) * inv.x;
-    float4 y0 = (vload4(0, node->lo_y) - o.y) * inv.y, y1 = (vload4(0, node->hi_y) - o.y) * inv.y;
-    float4 z0 = (vload4(0, node->lo_z) - o.z) * inv.z, z1 = (vload4(0, node->hi_z) - o.z) * inv.z;
-    float4 a = RTCD_MAX(RTCD_MAX(RTCD_MIN(x0, x1), RTCD_MIN(y0, y1)), RTCD_MAX(RTCD_MIN(z0, z1), (float4)(0.0f)));
-    float4 b = RTCD_MIN(RTCD_MAX(x0, x1), RTCD_MIN(RTCD_MAX(y0, y1), RTCD_MAX(z0, z1)));
+    rtcd_floatw x0 = (RTCD_VLOADW(0, node->lo_x) - o.x) * inv.x, x1 = (RTCD_VLOADW(0, node->hi_x) - o.x) * inv.x;
+    rtcd_floatw y0 = (RTCD_VLOADW(0, node->lo_y) - o.y) * inv.y, y1 = (RTCD_VLOADW(0, node->hi_y) - o.y) * inv.y;
+    rtcd_floatw z0 = (RTCD_VLOADW(0, node->lo_z) - o.z) * inv.z, z1 = (RTCD_VLOADW(0, node->hi_z) - o.z) * inv.z;
+    rtcd_floatw a = RTCD_MAX(RTCD_MAX(RTCD_MIN(x0, x1), RTCD_MIN(y0, y1)), RTCD_MAX(RTCD_MIN(z0, z1), (rtcd_floatw)(0.0f)));
+    rtcd_floatw b = RTCD_MIN(RTCD_MAX(x0, x1), RTCD_MIN(RTCD_MAX(y0, y1), RTCD_MAX(z0, z1)));
     a -= a * RTCD_BVH_MARGIN;
     b += fabs(b) * RTCD_BVH_MARGIN;
-    b = RTCD_MIN(b, (float4)(t_max));
-    vstore4(select((float4)(-1.0f), a, (a <= b) & (vload4(0, node->child) != (int4)(RTCD_BVH_NO_CHILD))), 0, entry);
+    b = RTCD_MIN(b, (rtcd_floatw)(t_max));
+    RTCD_VSTOREW(select((rtcd_floatw)(-1.0f), a, (a <= b) & (RTCD_VLOADW(0, node->child) != (rtcd_intw)(RTCD_BVH_NO_CHILD))), 0, entry);
     return;
   }
 #endif
-  for (k = 0; k < 4; ++k)
+  for (k = 0; k < RTCD_BVH_WIDTH; ++k)
     entry[k] = node->child[k] == RTCD_BVH_NO_CHILD
                    ? -1.0f
                    : rtcd_slab_entry(s, rtcd_v3(node->lo_x[k], node->lo_y[k], node->lo_z[k]),
@@ -168,22 +186,22 @@ RTCD_ALWAYS_INLINE void rtcd_slab_entries4(const rtcd_slab_ray* s, RTCD_GLOBAL c
  * best: the margin keeps ties. */
 RTCD_INLINE int rtcd_bvh_box_near(float d2, float best_d2) { return d2 * (1.0f - RTCD_BVH_MARGIN) <= best_d2; }
 
-/* A wide node's four child boxes: squared distances from the point, as
+/* A wide node's child boxes: squared distances from the point, as
  * rtcd_box_distance2's (-1: too far for the best, or no child); OpenCL
- * measures the four at once. */
-RTCD_ALWAYS_INLINE void rtcd_box_near4(rtcd_vec3 p, RTCD_GLOBAL const rtcd_bvh_wide_node* node, float best_d2,
+ * measures them all at once. */
+RTCD_ALWAYS_INLINE void rtcd_box_near_wide(rtcd_vec3 p, RTCD_GLOBAL const rtcd_bvh_wide_node* node, float best_d2,
                                        float* d2) {
 #ifdef __OPENCL_C_VERSION__
-  float4 dx = RTCD_MAX(RTCD_MAX(vload4(0, node->lo_x) - p.x, p.x - vload4(0, node->hi_x)), (float4)(0.0f));
-  float4 dy = RTCD_MAX(RTCD_MAX(vload4(0, node->lo_y) - p.y, p.y - vload4(0, node->hi_y)), (float4)(0.0f));
-  float4 dz = RTCD_MAX(RTCD_MAX(vload4(0, node->lo_z) - p.z, p.z - vload4(0, node->hi_z)), (float4)(0.0f));
-  float4 d = dx * dx + dy * dy + dz * dz;
-  vstore4(select((float4)(-1.0f), d,
-                 (d * (1.0f - RTCD_BVH_MARGIN) <= best_d2) & (vload4(0, node->child) != (int4)(RTCD_BVH_NO_CHILD))),
+  rtcd_floatw dx = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_x) - p.x, p.x - RTCD_VLOADW(0, node->hi_x)), (rtcd_floatw)(0.0f));
+  rtcd_floatw dy = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_y) - p.y, p.y - RTCD_VLOADW(0, node->hi_y)), (rtcd_floatw)(0.0f));
+  rtcd_floatw dz = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_z) - p.z, p.z - RTCD_VLOADW(0, node->hi_z)), (rtcd_floatw)(0.0f));
+  rtcd_floatw d = dx * dx + dy * dy + dz * dz;
+  RTCD_VSTOREW(select((rtcd_floatw)(-1.0f), d,
+                 (d * (1.0f - RTCD_BVH_MARGIN) <= best_d2) & (RTCD_VLOADW(0, node->child) != (rtcd_intw)(RTCD_BVH_NO_CHILD))),
           0, d2);
 #else
   int k;
-  for (k = 0; k < 4; ++k) {
+  for (k = 0; k < RTCD_BVH_WIDTH; ++k) {
     d2[k] = rtcd_box_distance2(p, rtcd_v3(node->lo_x[k], node->lo_y[k], node->lo_z[k]),
                                rtcd_v3(node->hi_x[k], node->hi_y[k], node->hi_z[k]));
     if (node->child[k] == RTCD_BVH_NO_CHILD || !rtcd_bvh_box_near(d2[k], best_d2)) d2[k] = -1.0f;
@@ -194,7 +212,7 @@ RTCD_ALWAYS_INLINE void rtcd_box_near4(rtcd_vec3 p, RTCD_GLOBAL const rtcd_bvh_w
 /* The children to visit (key >= 0), nearest first; returns how many. */
 RTCD_ALWAYS_INLINE int rtcd_bvh_order(const float* key, int* order) {
   int hits = 0, k, h;
-  for (k = 0; k < 4; ++k) {
+  for (k = 0; k < RTCD_BVH_WIDTH; ++k) {
     if (key[k] < 0.0f) continue;
     for (h = hits; h > 0 && key[order[h - 1]] > key[k]; --h) order[h] = order[h - 1];
     order[h] = k;
@@ -265,9 +283,9 @@ RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const r
     code = stack[top];
     while (code >= 0) { /* a wide node: the children the ray meets, the nearest next */
       RTCD_GLOBAL const rtcd_bvh_wide_node* node = wide + code;
-      float t[4];
-      int order[4], hits, h, k;
-      rtcd_slab_entries4(&slabs, node, best.t, t);
+      float t[RTCD_BVH_WIDTH];
+      int order[RTCD_BVH_WIDTH], hits, h, k;
+      rtcd_slab_entries_wide(&slabs, node, best.t, t);
       hits = rtcd_bvh_order(t, order);
       code = RTCD_BVH_NO_CHILD;
       if (hits == 0) break;
@@ -356,9 +374,9 @@ RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, float enoug
     code = stack[top];
     while (code >= 0) { /* a wide node: the children that may hold the nearest, the nearest next */
       RTCD_GLOBAL const rtcd_bvh_wide_node* node = wide + code;
-      float d2[4];
-      int order[4], hits, h, k;
-      rtcd_box_near4(point, node, best_d2, d2);
+      float d2[RTCD_BVH_WIDTH];
+      int order[RTCD_BVH_WIDTH], hits, h, k;
+      rtcd_box_near_wide(point, node, best_d2, d2);
       hits = rtcd_bvh_order(d2, order);
       code = RTCD_BVH_NO_CHILD;
       if (hits == 0) break;
