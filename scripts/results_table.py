@@ -427,18 +427,19 @@ def opencl_rows():
 
 
 def pocl_avalanche_rows():
-    """Phase C detect of the avalanche replays on PoCL against Embree, from a
-    file whose header names its date, commit and machine."""
-    source = "opencl/bvh_traversal.txt"
+    """Phase C detect of the avalanche replays on PoCL against Embree (and the
+    peers, where the file replayed them), from a file whose header names its
+    date, commit and machine."""
+    source = "opencl/wide_bvh.txt"
     where = f"{RESULTS}/{source}"
-    text = read_text("opencl", "bvh_traversal.txt")
+    text = read_text("opencl", "wide_bvh.txt")
     stamp = {}
     for key in ("date", "commit", "machine"):
         found = re.search(rf"^# {key}: (.+)$", text, re.M)
         if not found:
             raise ResultError(f"{where}: no '# {key}:' line")
         stamp[key] = found.group(1).strip()
-    detect = {"new": [], "embree": []}
+    detect = {"new": [], "embree": [], "gimpact": [], "fcl": []}
     for section in re.split(r"^## ", text, flags=re.M)[1:]:
         who = section.split()[0]
         row = re.search(r"^\| C \| \d+ \| ([0-9.]+) \|", section, re.M)
@@ -449,8 +450,13 @@ def pocl_avalanche_rows():
     if not detect["new"] or not detect["embree"]:
         raise ResultError(f"{where}: no 'new' or no 'embree' replay")
     opencl, embree = statistics.median(detect["new"]), statistics.median(detect["embree"])
+    value = f"{opencl:.1f} ÷ {embree:.1f} ms: {opencl / embree:.2f}×"
+    peers = [f"{name} {statistics.median(detect[key]):.1f} ms" for key, name in (("gimpact", "GIMPACT"), ("fcl", "FCL"))
+             if detect[key]]
+    if peers:
+        value += " (one thread, the same steps: " + ", ".join(peers) + ")"
     return [Row("avalanche phase C detect on PoCL: OpenCL on one `basic` device ÷ Embree on one thread (floor 1.5×)",
-                f"{opencl:.1f} ÷ {embree:.1f} ms: {opencl / embree:.2f}×", "opencl", source, [stamp])]
+                value, "opencl", source, [stamp])]
 
 
 def gpu_rows():
