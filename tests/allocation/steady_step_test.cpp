@@ -130,9 +130,10 @@ struct Allocations {
 
 // What the measured steps did: contacts of the last, the steps in which
 // every pair walked and some ray was walked, the pairs skipped on a
-// certificate and the certificates granted and expired, summed.
+// certificate and the certificates granted and expired, summed; the most
+// devices that ran commands in a step.
 struct Measured {
-  size_t contacts = 0, walked_steps = 0, certified = 0, granted = 0, expired = 0;
+  size_t contacts = 0, walked_steps = 0, certified = 0, granted = 0, expired = 0, devices = 0;
 };
 
 // Allocations made by `steps` steps after `warmup` steps, B moved by
@@ -162,6 +163,9 @@ Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measur
     m.certified += result.stats.pairs_certified;
     m.granted += result.stats.certificates_granted;
     m.expired += result.stats.certificates_expired;
+    const auto busy = size_t(std::count_if(result.stats.devices.begin(), result.stats.devices.end(),
+                                           [](const DeviceWork& w) { return w.launches > 0; }));
+    m.devices = std::max(m.devices, busy);
   }
   m.contacts = result.contacts.size();
   return {allocations.load() - before.heap, cxx_allocations.load() - before.cxx};
@@ -214,6 +218,35 @@ TEST_P(SteadyStep, AllocatesNothing) {
   // The walking modes' measured steps walk: their buffers are the walks'.
   if (mode != Mode::full) {
     EXPECT_EQ(m.walked_steps, 10u) << "measured steps in which every pair walked";
+  }
+}
+
+// Issue floor: the OpenCL runtime's own allocations a step do not grow
+// with the pairs: one pair and 64, in one process after both warmed up (a
+// runtime's first steps allocate more), make as many per busy device in
+// each mode, within 16 a step: PoCL's pthread devices vary by a few from
+// run to run (about 110 walking, 224 in full; one `basic` device makes
+// exactly as many), and one allocation per pair would add 32 a device. The
+// 64 pairs spread over both devices, the one pair runs on one.
+TEST(Allocation, OpenClRuntimeAllocatesAsMuchForOnePairAsFor64) {
+  for (Mode mode : {Mode::full, Mode::iterative, Mode::automatic}) {
+    SCOPED_TRACE(to_string(mode));
+    Steady one = make_steady("opencl", mode, 1), many = make_steady("opencl", mode, 64);
+    Measured m1, m64;
+    allocations_in_steady_steps(one, 4, 1, m1);
+    allocations_in_steady_steps(many, 4, 1, m64);
+    const Allocations a1 = allocations_in_steady_steps(one, 2, 10, m1);
+    const Allocations a64 = allocations_in_steady_steps(many, 2, 10, m64);
+    ASSERT_GT(m1.devices * m64.devices, 0u) << "no device ran: the comparison would be vacuous";
+    const double per_device1 = double(a1.heap) / double(10 * m1.devices);
+    const double per_device64 = double(a64.heap) / double(10 * m64.devices);
+    std::cout << to_string(mode) << ": " << per_device1 << " and " << per_device64 << " a step and device ("
+              << m1.devices << " and " << m64.devices << " devices)\n";
+    EXPECT_EQ(a1.cxx, 0u) << "C++ allocations in 10 steps of 1 pair";
+    EXPECT_EQ(a64.cxx, 0u) << "C++ allocations in 10 steps of 64 pairs";
+    EXPECT_NEAR(per_device64, per_device1, 16.0) << "the runtime's allocations a step and device, 1 pair against 64";
+    EXPECT_GT(a1.heap, 0u) << "the runtime allocated nothing: the comparison would be vacuous";
+    EXPECT_GT(m64.contacts, m1.contacts);
   }
 }
 
