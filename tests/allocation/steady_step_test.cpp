@@ -221,7 +221,7 @@ TEST_P(SteadyStep, AllocatesNothing) {
   }
 }
 
-// Issue floor: the OpenCL runtime's own allocations a step do not grow
+// The OpenCL runtime's own allocations a step do not grow
 // with the pairs: one pair and 64, in one process after both warmed up (a
 // runtime's first steps allocate more), make as many per busy device in
 // each mode, within 16 a step: PoCL's pthread devices vary by a few from

@@ -220,7 +220,7 @@ const char* kTumble = R"({
                        "random_orientation": true}}]
 })";
 
-// Issue floor: on two devices, a pair runs on one device from the step it
+// On two devices, a pair runs on one device from the step it
 // joins the broad phase's set until it leaves it, over 200 recorded steps
 // in which pairs come and go (a pair that leaves and comes back may move).
 TEST(Replay, OpenClPairsKeepTheirDeviceWhileInTheBroadPhase) {

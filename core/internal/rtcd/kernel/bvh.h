@@ -49,6 +49,8 @@ typedef int4 rtcd_intw;
 #endif
 #define RTCD_BVH_NO_CHILD (-1)
 #define RTCD_BVH_LEAF(first, count) (-2 - (rtcd_int)((first) * 4u + (count)))
+#define RTCD_BVH_LEAF_FIRST(code) ((rtcd_uint)(-2 - (code)) / 4u)
+#define RTCD_BVH_LEAF_COUNT(code) ((rtcd_uint)(-2 - (code)) % 4u)
 
 /* Relative margin on box distances: a few hundred float ulps, far more than
  * the box tests round. */
@@ -301,14 +303,14 @@ RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const r
           rtcd_bvh_range_first_hit(&slabs, nodes, node->subtree[k], nodes[node->subtree[k]].escape, primitives,
                                    positions, triangles, zero_area, &best);
         } else {
-          rtcd_bvh_leaf_first_hit(ray, (rtcd_uint)(-2 - c) / 4u, (rtcd_uint)(-2 - c) % 4u, primitives, positions,
+          rtcd_bvh_leaf_first_hit(ray, RTCD_BVH_LEAF_FIRST(c), RTCD_BVH_LEAF_COUNT(c), primitives, positions,
                                   triangles, zero_area, &best);
         }
       }
       code = node->child[order[0]];
     }
     if (code <= -2)
-      rtcd_bvh_leaf_first_hit(ray, (rtcd_uint)(-2 - code) / 4u, (rtcd_uint)(-2 - code) % 4u, primitives, positions,
+      rtcd_bvh_leaf_first_hit(ray, RTCD_BVH_LEAF_FIRST(code), RTCD_BVH_LEAF_COUNT(code), primitives, positions,
                               triangles, zero_area, &best);
   }
   return best;
@@ -392,14 +394,14 @@ RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, float enoug
           rtcd_bvh_range_nearest(point, nodes, node->subtree[k], nodes[node->subtree[k]].escape, primitives, positions,
                                  triangles, zero_area, &best, &best_d2);
         } else {
-          rtcd_bvh_leaf_nearest(point, (rtcd_uint)(-2 - c) / 4u, (rtcd_uint)(-2 - c) % 4u, primitives, positions,
+          rtcd_bvh_leaf_nearest(point, RTCD_BVH_LEAF_FIRST(c), RTCD_BVH_LEAF_COUNT(c), primitives, positions,
                                 triangles, zero_area, &best, &best_d2);
         }
       }
       code = node->child[order[0]];
     }
     if (code <= -2) {
-      rtcd_bvh_leaf_nearest(point, (rtcd_uint)(-2 - code) / 4u, (rtcd_uint)(-2 - code) % 4u, primitives, positions,
+      rtcd_bvh_leaf_nearest(point, RTCD_BVH_LEAF_FIRST(code), RTCD_BVH_LEAF_COUNT(code), primitives, positions,
                             triangles, zero_area, &best, &best_d2);
       if (best_d2 <= enough_d2) break;
     }
