@@ -3,6 +3,7 @@
 # and iterative mode), the avalanche recording replayed on it with edge
 # contacts (the default) and without (the thesis' configuration), the same
 # replay on Embree with 2 threads and with every core of the machine, the
+# stream of 500 bodies' recording on the GPU and on Embree, the
 # host's side on 2 threads and on every core, and
 # rtcd_bench's steady-contact cases. Needs an OpenCL GPU driver (its ICD).
 #   bash bench/gpu.sh [OUT]        (default docs/results/gpu)
@@ -12,8 +13,10 @@ out=${1:-docs/results/gpu}
 bin=build/release/bin/rtcd
 mkdir -p "$out"
 recording=$(mktemp)
-trap 'rm -f "$recording"' EXIT
+stream=$(mktemp)
+trap 'rm -f "$recording" "$stream"' EXIT
 xz -dc docs/results/avalanche/recording.rtcdrec.xz > "$recording"
+xz -dc docs/results/stream/recording.rtcdrec.xz > "$stream"
 { nvidia-smi --query-gpu=name,driver_version,memory.total --format=csv 2>/dev/null; lscpu | grep -E "Model name|^CPU\(s\)"; } > "$out/machine.txt"
 "$bin" backends > "$out/backends.txt"
 run() {
@@ -37,6 +40,8 @@ for threads in 2 "$all"; do
     --no-edge-contacts
 done
 run replay_embree_all_vertex "$bin" replay "$recording" --backend embree --threads "$all" --no-edge-contacts
+run replay_stream_gpu "$bin" replay "$stream" --backend opencl:gpu --threads 2
+run replay_stream_embree2 "$bin" replay "$stream" --backend embree --threads 2
 run replay_gpu_full_threads$all "$bin" replay "$recording" --backend opencl:gpu --threads "$all" --mode full
 run bench build/release/bench/rtcd_bench --benchmark_filter='opencl|full_embree|^iterative/' \
   --benchmark_repetitions=3 --benchmark_report_aggregates_only=true

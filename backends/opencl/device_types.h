@@ -5,6 +5,7 @@
 
 #include "rtcd/kernel/bvh.h"
 #include "rtcd/kernel/fold.h"
+#include "rtcd/kernel/tally.h"
 #include "rtcd/kernel/tracer.h"
 
 /* A registered shape: where its data lies in the concatenated buffers. */
@@ -47,5 +48,20 @@ typedef struct {
   rtcd_int triangle;
   rtcd_int entry;
 } rtcd_tracked;
+
+/* A contact or predictive ray of a job, and its place among the job's kept rays. */
+typedef struct {
+  rtcd_outcome outcome;
+  rtcd_uint place;
+} rtcd_report;
+
+/* What the host reads of a job: its rays, the kept ones among them, and
+ * those that report. */
+typedef struct {
+  rtcd_uint rays;
+  rtcd_uint kept;
+  rtcd_uint contacts;
+  rtcd_uint predictive;
+} rtcd_job_summary;
 
 #endif

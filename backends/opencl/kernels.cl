@@ -201,6 +201,7 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
                                               __global const rtcd_uint* primitives) {
   rtcd_trace_params p = jobs[c->job].params;
   rtcd_device_shape shape = shapes[jobs[c->job].target];
+  int item = rtcd_item_kind(shape.kind, &p, c->vertex);
   rtcd_outcome o;
   rtcd_outcome_init(&o, c->vertex);
   if (shape.kind == RTCD_TARGET_MESH) {
@@ -218,12 +219,12 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
     t.primitives = primitives + shape.first_primitive;
     t.triangle_count = shape.triangle_count;
     t.node_count = shape.node_count;
-    if (c->vertex >= p.first_edge) rtcd_edge_trace(&t, &p, c, &o);
+    if (item != RTCD_ITEM_ORIGIN) rtcd_edge_trace(&t, &p, c, &o);
     else if (p.iterative) rtcd_walk_trace(&t, &p, c, &o);
     else rtcd_full_trace(&t, &p, c, 0, &o);
-  } else if (c->vertex >= p.first_edge && p.source_radius > 0.0f) {
+  } else if (item == RTCD_ITEM_SPHERE) {
     rtcd_sphere_trace(shape.kind, shape.radius, shape.half_extents, &p, c, &o);
-  } else if (c->vertex >= p.first_edge) {
+  } else if (item == RTCD_ITEM_EDGE) {
     rtcd_edge_volume_trace(shape.kind, shape.radius, shape.half_extents, &p, c, &o);
   } else {
     rtcd_volume_trace(shape.kind, shape.radius, shape.half_extents, &p, c, &o);
@@ -279,29 +280,92 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
 }
 #endif
 
-/* One job: the rays it goes on tracking (every outcome but the dropped
- * ones, in order) written where the next step's rtcd_select reads them, so
- * they stay on the device. Grid layout: the job's items, flagged; compacted:
- * its rays. */
-__kernel void rtcd_keep(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
-                        __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
-                        __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
-                        rtcd_uint kept_base, __global rtcd_tracked* kept) {
+/* A job's rays, in order: its flagged items (grid layout) or its compacted
+ * rays. The first, and one past the last. */
+#define RTCD_JOB_RAYS(j, grid, firsts, counts) \
+  first = firsts[j];                            \
+  end = first + ((grid) ? jobs[j].item_count : counts[j])
+
+/* One job's outcomes settled: the rays it goes on tracking (every outcome
+ * but the dropped ones, in order) written where the next step's
+ * rtcd_select reads them, so they stay on the device, and its outcomes
+ * counted (kernel/tally.h) for rtcd_total. */
+__kernel void rtcd_settle(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
+                          __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
+                          __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
+                          rtcd_uint kept_base, __global rtcd_tracked* kept, __global rtcd_tally* tallies) {
   rtcd_uint j = get_global_id(0);
-  rtcd_uint first, n, k;
+  rtcd_uint first, end, k;
+  int iterative;
   __global rtcd_tracked* out;
+  rtcd_tally t;
   if (j >= job_count) return;
-  first = firsts[j];
-  n = grid ? jobs[j].item_count : counts[j];
+  RTCD_JOB_RAYS(j, grid, firsts, counts);
+  iterative = jobs[j].params.iterative;
   out = kept + kept_base + first;
-  for (k = first; k < first + n; ++k) {
+  rtcd_tally_clear(&t);
+  for (k = first; k < end; ++k) {
     rtcd_outcome o;
     if (grid && !flags[k]) continue;
     o = outcomes[k];
+    rtcd_tally_count(&t, &o, iterative);
     if (o.kind == RTCD_RAY_DROPPED) continue;
     out->vertex = o.vertex;
     out->triangle = o.triangle;
     out->entry = o.entry;
     ++out;
+  }
+  tallies[j] = t;
+}
+
+/* One work-item: each job's first report (its contacts and predictive rays
+ * laid out one job after another) and what the host reads of it, and the
+ * batch's counters summed. */
+__kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count, __global rtcd_uint* first_reports,
+                         __global rtcd_job_summary* summaries, __global rtcd_tally* total) {
+  rtcd_uint j, n = 0;
+  rtcd_tally sum;
+  if (get_global_id(0) != 0) return;
+  rtcd_tally_clear(&sum);
+  for (j = 0; j < job_count; ++j) {
+    rtcd_tally t = tallies[j];
+    rtcd_job_summary s;
+    s.rays = (rtcd_uint)(t.candidates + t.edges_tested);
+    s.kept = (rtcd_uint)t.kept;
+    s.contacts = (rtcd_uint)t.contacts;
+    s.predictive = (rtcd_uint)t.predictive;
+    summaries[j] = s;
+    first_reports[j] = n;
+    n += s.contacts + s.predictive;
+    rtcd_tally_add(&sum, &t);
+  }
+  first_reports[job_count] = n;
+  *total = sum;
+}
+
+/* One job: its outcomes that report (contacts and predictive rays), in
+ * order, with their places among its kept rays, so the host reads these
+ * whole and the kept rays only as rtcd_settle wrote them. */
+__kernel void rtcd_reports(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
+                          __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
+                          __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
+                          __global const rtcd_uint* first_reports, __global rtcd_report* reports) {
+  rtcd_uint j = get_global_id(0);
+  rtcd_uint first, end, k, place = 0;
+  __global rtcd_report* out;
+  if (j >= job_count) return;
+  RTCD_JOB_RAYS(j, grid, firsts, counts);
+  out = reports + first_reports[j];
+  for (k = first; k < end; ++k) {
+    rtcd_outcome o;
+    if (grid && !flags[k]) continue;
+    o = outcomes[k];
+    if (o.kind == RTCD_RAY_DROPPED) continue;
+    if (o.kind == RTCD_RAY_PENETRATING || o.kind == RTCD_RAY_PREDICTIVE) {
+      out->outcome = o;
+      out->place = place;
+      ++out;
+    }
+    ++place;
   }
 }

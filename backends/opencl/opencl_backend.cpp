@@ -13,12 +13,16 @@
 //      then one over the jobs, so the candidates form a compacted list in
 //      the CPU's order, laid out on the device;
 //   3. rtcd_scatter and rtcd_trace: candidates to their places, then one
-//      work-item per ray running kernel/trace.h; the counts and the
-//      outcomes come back after one wait (the outcomes up to a bound
-//      guessed from the last batch; past it, a second read and wait) and
-//      are written into each job's slot, so the step is in job order;
-//   4. rtcd_keep: the rays each job goes on tracking stay on the device for
-//      the next step's walks (jobs and frames go up, outcomes come down).
+//      work-item per ray running kernel/trace.h;
+//   4. rtcd_settle, rtcd_total and rtcd_reports: the rays each job goes on
+//      tracking stay on the device for the next step's walks; its outcomes
+//      are counted there (kernel/tally.h), and those that report (contacts,
+//      predictive rays) are laid out by job. After one wait the host reads
+//      the counters, a summary a job, the reports whole and the kept rays
+//      as the walks start from them (each up to a bound guessed from the
+//      last batch; past it, a second read and wait), and rebuilds each
+//      job's kept outcomes in its slot, so the step is in job order (jobs
+//      and frames go up; no other outcome comes down).
 // The grid layout (iterative batches) does 1 and 3 in one kernel,
 // rtcd_trace_items: each item placed and, if a candidate, traced in place.
 // Any fault (no platform, a failed build, out of memory, a device error)
@@ -46,6 +50,7 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
 static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_report) == 36 && sizeof(rtcd_job_summary) == 16 && sizeof(rtcd_tally) == 8 * 23);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
 
 constexpr size_t kGroupSize = 64;
@@ -69,6 +74,7 @@ constexpr size_t kTracedShapeBuffers = kOrigins;
 // batch runs on the device while the walks are set up.
 struct Lane {
   GrowingBuffer jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
+  GrowingBuffer tallies, first_reports, summaries, total, reports;
   // The jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
@@ -77,29 +83,36 @@ struct Lane {
   std::vector<rtcd_uint> host_near;  // full jobs' near-leaf bits, by source-tree node
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
-  std::vector<rtcd_outcome> host_outcomes;
-  std::vector<rtcd_uchar> host_flags;  // grid layout
-  uint32_t items = 0, ray_count = 0;
-  // The compacted layout's outcome read: how many are read before the
-  // count is known (read_bound), guessed from the last batch's rays per item.
-  uint32_t read_bound = 0;
-  double rays_per_item = 0;
+  // What comes back: the batch's counters, a summary a job, the reports by
+  // job (host_first_reports), and the kept rays by job from kept_base on.
+  std::vector<rtcd_tally> host_total;  // one
+  std::vector<rtcd_job_summary> host_summaries;
+  std::vector<rtcd_uint> host_first_reports;
+  std::vector<rtcd_report> host_reports;
+  std::vector<rtcd_tracked> host_kept;
+  uint32_t items = 0, ray_count = 0, report_count = 0;
+  uint32_t last_reports = 0;  // report_count the step before (0: it did not run)
+  // The reads made before the counts are known: the kept rays up to
+  // read_bound (compacted layout: guessed from the last batch's rays per
+  // item) and the reports up to report_bound (guessed likewise).
+  uint32_t read_bound = 0, report_bound = 0;
+  double rays_per_item = 0, reports_per_item = 0;
   size_t load = 0;
   uint32_t upload_base = 0;  // the batch's uploaded tracked rays in the read buffer
   uint32_t kept_base = 0;    // the batch's kept rays in the written buffer
-  bool keeps = false;        // some job of the batch keeps a residence
   cl::Event outcomes_read;   // its last read
   bool pending = false;      // enqueued, not finished
+  bool ran = false;          // its counters are this step's
 };
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel list, select, count, offsets, scatter, trace, trace_items, keep;
+  cl::Kernel list, select, count, offsets, scatter, trace, trace_items, settle, total, report;
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
   // Tracked rays that stay on the device, by step parity: the step's
-  // batches append what they keep to one (rtcd_keep) while its walks read
+  // batches append what they keep to one (rtcd_settle) while its walks read
   // the other, written the step before, with the rays that came from
   // elsewhere (the host's mirror) appended there.
   GrowingBuffer kept[2];
@@ -143,11 +156,13 @@ class OpenClExecutor final : public RayExecutor {
         device.offsets = cl::Kernel(runtime_->program, "rtcd_offsets");
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
-        device.keep = cl::Kernel(runtime_->program, "rtcd_keep");
+        device.settle = cl::Kernel(runtime_->program, "rtcd_settle");
+        device.total = cl::Kernel(runtime_->program, "rtcd_total");
+        device.report = cl::Kernel(runtime_->program, "rtcd_reports");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
              {&device.list, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
-              &device.trace_items, &device.keep})
+              &device.trace_items, &device.settle, &device.total, &device.report})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
@@ -191,8 +206,12 @@ class OpenClExecutor final : public RayExecutor {
     // The CPU takes over from the jobs, the full batch's too when it was
     // still on a device.
     on_cpu_ = true;
-    if (full_ && full_ != &batch) cpu().execute(*full_);
+    if (full_ && full_ != &batch) {
+      full_->counted = {};
+      cpu().execute(*full_);
+    }
     full_ = nullptr;
+    batch.counted = {};
     cpu().execute(batch);
   }
 
@@ -325,21 +344,22 @@ class OpenClExecutor final : public RayExecutor {
     write_at(d, b, v, 0);
   }
 
-  // Elements [first, first + count) of `b` into `v`, which holds them.
+  // Elements [at + first, at + first + count) of `b` into `v` from `first`
+  // on; `v` holds them.
   template <class T>
-  void read(Device& d, const GrowingBuffer& b, std::vector<T>& v, size_t first, size_t count,
+  void read(Device& d, const GrowingBuffer& b, size_t at, std::vector<T>& v, size_t first, size_t count,
             cl::Event* done = nullptr) {
     cl::Event* event = timed(d, false);
-    d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, first * sizeof(T), count * sizeof(T), v.data() + first, nullptr,
-                              event);
+    d.queue.enqueueReadBuffer(b.buffer, CL_FALSE, (at + first) * sizeof(T), count * sizeof(T), v.data() + first,
+                              nullptr, event);
     if (done) *done = *event;
     d.work.bytes_from_device += count * sizeof(T);
     ++d.work.reads;
   }
 
   template <class T>
-  void read(Device& d, const GrowingBuffer& b, std::vector<T>& v, cl::Event* done = nullptr) {
-    read(d, b, v, 0, v.size(), done);
+  void read(Device& d, const GrowingBuffer& b, std::vector<T>& v) {
+    read(d, b, 0, v, 0, v.size());
   }
 
   // The job's tracked rays are on a device already: they were kept there
@@ -366,8 +386,9 @@ class OpenClExecutor final : public RayExecutor {
       lane.ray_count = 0;
       lane.load = 0;
       lane.upload_base = runtime_->place_on_device ? d.kept_used[(step_ + 1) % 2] : 0;
-      lane.keeps = false;
+      lane.last_reports = lane.ran ? lane.report_count : 0;
       lane.pending = false;
+      lane.ran = false;
     }
     // Jobs 2i and 2i + 1 are one pair's (RayBatch).
     const auto placed = [&](uint32_t j) -> const Residence* {
@@ -412,7 +433,6 @@ class OpenClExecutor final : public RayExecutor {
     lane.host_frames.push_back(make_frame(job));
     lane.items += rtcd_uint(items);
     lane.load += items;
-    lane.keeps = lane.keeps || job.residence;
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves), as bits
@@ -481,6 +501,13 @@ class OpenClExecutor final : public RayExecutor {
     ++d.work.launches;
   }
 
+  // `args` as a kernel's arguments from index `first` on; returns the next index.
+  template <class... Args>
+  static cl_uint set_args(cl::Kernel& k, cl_uint first, const Args&... args) {
+    (k.setArg(first++, args), ...);
+    return first;
+  }
+
   // The arguments both trace kernels open with: the jobs, then the shape
   // data from the table to the BVH's triangle lists. Returns the next
   // argument's index.
@@ -490,11 +517,9 @@ class OpenClExecutor final : public RayExecutor {
     return cl_uint(1 + kTracedShapeBuffers);
   }
 
-  // rtcd_trace over at most `rays` rays, the first `read_count` outcomes
-  // read back.
-  void enqueue_trace(Device& d, Lane& lane, uint32_t rays, uint32_t read_count) {
+  // rtcd_trace over at most `rays` rays.
+  void enqueue_trace(Device& d, Lane& lane, uint32_t rays) {
     reserve(lane.outcomes, rays * sizeof(rtcd_outcome));
-    lane.host_outcomes.resize(rays);
     cl::Kernel& k = d.trace;
     const cl_uint next = bind_jobs_and_shapes(d, lane, k);
     k.setArg(next, lane.rays.buffer);
@@ -502,31 +527,56 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(next + 2, rtcd_uint(lane.host_jobs.size()));
     k.setArg(next + 3, lane.outcomes.buffer);
     launch(d, k, rays);
-    read(d, lane.outcomes, lane.host_outcomes, 0, read_count, &lane.outcomes_read);
   }
 
-  // rtcd_keep after the trace: the batch's tracked rays for the next step
-  // stay on the device, each job's at the place of its items (grid) or
-  // rays (compacted) past kept_base, which the residences record; room is
-  // made for `count`, an upper bound when the rays are not counted yet.
-  void keep(Device& d, Lane& lane, const GrowingBuffer& firsts, uint32_t count) {
-    if (!lane.keeps) return;
+  // After the trace, on the device: each job's kept rays written past
+  // kept_base at the place of its items (grid) or rays (compacted), which
+  // the residences record, and its outcomes counted (rtcd_settle); its
+  // reports laid out (rtcd_total, rtcd_reports). Then the reads: the
+  // counters, the summaries, the kept rays up to `kept_read` and the
+  // reports up to a bound guessed from the last batch. Room is made for
+  // `count` rays, an upper bound when they are not counted yet.
+  void settle(Device& d, Lane& lane, const GrowingBuffer& firsts, uint32_t count, uint32_t kept_read) {
+    const auto jobs_count = rtcd_uint(lane.host_jobs.size());
     GrowingBuffer& kept = d.kept[step_ % 2];
     uint32_t& used = d.kept_used[step_ % 2];
     lane.kept_base = used;
     reserve_tracked(d, kept, size_t(used) + count, used);
     used += count;
-    cl::Kernel& k = d.keep;
-    k.setArg(0, lane.jobs.buffer);
-    k.setArg(1, rtcd_uint(lane.host_jobs.size()));
-    k.setArg(2, rtcd_uint(grid(lane)));
-    k.setArg(3, firsts.buffer);
-    k.setArg(4, grid(lane) ? firsts.buffer : lane.counts.buffer);
-    k.setArg(5, lane.flags.buffer);
-    k.setArg(6, lane.outcomes.buffer);
-    k.setArg(7, lane.kept_base);
-    k.setArg(8, kept.buffer);
-    launch(d, k, lane.host_jobs.size());
+    reserve(lane.flags, 1);  // bound unread by the compacted layout
+    reserve(lane.tallies, jobs_count * sizeof(rtcd_tally));
+    reserve(lane.first_reports, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
+    reserve(lane.summaries, jobs_count * sizeof(rtcd_job_summary));
+    reserve(lane.total, sizeof(rtcd_tally));
+    reserve(lane.reports, count * sizeof(rtcd_report));
+    const rtcd_uint in_grid = grid(lane);
+    const cl::Buffer& counts = in_grid ? firsts.buffer : lane.counts.buffer;  // the grid reads item counts
+    // rtcd_settle and rtcd_reports open with the arguments that find each
+    // job's outcomes (RTCD_JOB_RAYS).
+    const auto bind_job_rays = [&](cl::Kernel& k) {
+      return set_args(k, 0, lane.jobs.buffer, jobs_count, in_grid, firsts.buffer, counts, lane.flags.buffer,
+                      lane.outcomes.buffer);
+    };
+    cl::Kernel& s = d.settle;
+    set_args(s, bind_job_rays(s), lane.kept_base, kept.buffer, lane.tallies.buffer);
+    launch(d, s, jobs_count);
+    cl::Kernel& t = d.total;
+    set_args(t, 0, lane.tallies.buffer, jobs_count, lane.first_reports.buffer, lane.summaries.buffer,
+             lane.total.buffer);
+    launch(d, t, 1);
+    cl::Kernel& r = d.report;
+    set_args(r, bind_job_rays(r), lane.first_reports.buffer, lane.reports.buffer);
+    launch(d, r, jobs_count);
+    lane.host_total.resize(1);
+    lane.host_summaries.resize(jobs_count);
+    lane.host_kept.resize(count);
+    lane.host_reports.resize(count);
+    lane.read_bound = kept_read;
+    lane.report_bound = std::min<uint32_t>(count, uint32_t(1.25 * expected_reports(d, lane)) + 64);
+    read(d, lane.total, lane.host_total);
+    read(d, lane.summaries, lane.host_summaries);
+    read(d, kept, lane.kept_base, lane.host_kept, 0, kept_read);
+    read(d, lane.reports, 0, lane.host_reports, 0, lane.report_bound, &lane.outcomes_read);
   }
 
   // How a batch's rays are laid out (DeviceLayout). Compacted: a prefix sum
@@ -544,12 +594,9 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // The grid layout: every item placed and traced in place by one kernel
-  // (the non-candidates return at once), flags and outcomes back in one
-  // read; finish_grid keeps the candidates' outcomes.
+  // (the non-candidates return at once, unflagged).
   void trace_in_place(Device& d, Lane& lane) {
     reserve(lane.outcomes, lane.items * sizeof(rtcd_outcome));
-    lane.host_outcomes.resize(lane.items);
-    lane.host_flags.resize(lane.items);
     cl::Kernel& k = d.trace_items;
     const cl_uint next = bind_jobs_and_shapes(d, lane, k);
     k.setArg(next, lane.first_items.buffer);
@@ -563,19 +610,7 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(next + 8, lane.flags.buffer);
     k.setArg(next + 9, lane.outcomes.buffer);
     launch(d, k, lane.items);
-    read(d, lane.flags, lane.host_flags);
-    read(d, lane.outcomes, lane.host_outcomes, &lane.outcomes_read);
-    keep(d, lane, lane.first_items, lane.items);
-  }
-
-  // Each job's rays, its flagged items (deliver copies their outcomes).
-  static void finish_grid(Lane& lane) {
-    for (size_t l = 0; l < lane.host_jobs.size(); ++l) {
-      const rtcd_device_job& job = lane.host_jobs[l];
-      const rtcd_uchar* flags = lane.host_flags.data() + job.first_item;
-      lane.host_counts[l] = uint32_t(std::count_if(flags, flags + job.item_count, [](rtcd_uchar f) { return f != 0; }));
-    }
-    first_rays(lane);
+    settle(d, lane, lane.first_items, lane.items, lane.items);
   }
 
   // Phase 1, on the device: a full batch's items listed; for the compacted
@@ -640,8 +675,7 @@ class OpenClExecutor final : public RayExecutor {
 
   // The compacted layout on the device: candidates scattered and traced
   // with no count known on the host (the launch covers every item); the
-  // counts, and the outcomes up to a bound guessed from the last batch,
-  // are read back (finish_compacted reads the rest, if the guess fell short).
+  // kept rays are read up to a bound guessed from the last batch.
   void trace_compacted(Device& d, Lane& lane) {
     reserve(lane.rays, lane.items * sizeof(rtcd_candidate));
     cl::Kernel& k = d.scatter;
@@ -654,22 +688,48 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(6, lane.staging.buffer);
     k.setArg(7, lane.rays.buffer);
     launch(d, k, lane.items);
-    lane.read_bound = std::min<uint32_t>(lane.items, uint32_t(1.25 * lane.rays_per_item * lane.items) + 64);
-    read(d, lane.counts, lane.host_counts);
-    enqueue_trace(d, lane, lane.items, lane.read_bound);
-    keep(d, lane, lane.first_rays, lane.items);
+    enqueue_trace(d, lane, lane.items);
+    settle(d, lane, lane.first_rays, lane.items,
+           std::min<uint32_t>(lane.items, uint32_t(1.25 * lane.rays_per_item * lane.items) + 64));
   }
 
-  // After the wait: the layout of the rays the device counted, and the
-  // outcomes past the guessed bound, after a second wait.
-  void finish_compacted(Device& d, Lane& lane) {
-    first_rays(lane);
-    if (lane.ray_count > lane.read_bound) {
-      read(d, lane.outcomes, lane.host_outcomes, lane.read_bound, lane.ray_count - lane.read_bound,
-           &lane.outcomes_read);
-      wait(d, lane.outcomes_read);
+  // A batch's reports, guessed before they are counted. Walks: last step's
+  // reports on this device, whose rays they track (a pair keeps its
+  // device); full batches: last batch's reports per item.
+  static double expected_reports(const Device& d, const Lane& lane) {
+    if (&lane == &d.lanes[1]) return double(d.lanes[0].last_reports) + d.lanes[1].last_reports;
+    return lane.reports_per_item * lane.items;
+  }
+
+  // After the wait: each job's first ray and report from the summaries, and
+  // what the guessed bounds left unread, enqueued behind `last`; returns
+  // whether there was any.
+  bool count_results(Device& d, Lane& lane, cl::Event& last) {
+    const size_t jobs = lane.host_summaries.size();
+    lane.host_first_rays.resize(jobs + 1);
+    lane.host_first_reports.resize(jobs + 1);
+    uint32_t rays = 0, reports = 0;
+    for (size_t l = 0; l < jobs; ++l) {
+      const rtcd_job_summary& s = lane.host_summaries[l];
+      lane.host_first_rays[l] = rays;
+      lane.host_first_reports[l] = reports;
+      rays += s.rays;
+      reports += s.contacts + s.predictive;
     }
-    lane.rays_per_item = double(lane.ray_count) / lane.items;
+    lane.host_first_rays[jobs] = lane.ray_count = rays;
+    lane.host_first_reports[jobs] = lane.report_count = reports;
+    lane.rays_per_item = double(rays) / lane.items;
+    lane.reports_per_item = double(reports) / lane.items;
+    bool more = false;
+    if (!grid(lane) && rays > lane.read_bound) {
+      read(d, d.kept[step_ % 2], lane.kept_base, lane.host_kept, lane.read_bound, rays - lane.read_bound, &last);
+      more = true;
+    }
+    if (reports > lane.report_bound) {
+      read(d, lane.reports, 0, lane.host_reports, lane.report_bound, reports - lane.report_bound, &last);
+      more = true;
+    }
+    return more;
   }
 
   // One device's share of a batch, enqueued and flushed; nothing waits.
@@ -694,32 +754,33 @@ class OpenClExecutor final : public RayExecutor {
     } else {  // the host placed and counted the rays
       first_rays(lane);
       if (lane.ray_count == 0) return;
-      lane.read_bound = lane.ray_count;
       write(d, lane.jobs, lane.host_jobs);
       write(d, lane.first_rays, lane.host_first_rays);
+      write(d, lane.counts, lane.host_counts);
       write(d, lane.rays, lane.host_rays);
-      enqueue_trace(d, lane, lane.ray_count, lane.ray_count);
+      enqueue_trace(d, lane, lane.ray_count);
+      settle(d, lane, lane.first_rays, lane.ray_count, lane.ray_count);
     }
     d.queue.flush();
     lane.pending = true;
   }
 
-  // Both lanes' outcomes on the host: one wait, for the last read enqueued
-  // (an in-order queue has finished everything before it), then what each
-  // layout does with them.
+  // Both lanes' results on the host: one wait, for the last read enqueued
+  // (an in-order queue has finished everything before it), and a second
+  // only when a guessed bound fell short.
   void finish(Device& d) {
     Lane* last = nullptr;
     for (Lane& lane : d.lanes)
       if (lane.pending) last = &lane;
     if (!last) return;
     wait(d, last->outcomes_read);
+    cl::Event rest;
+    bool more = false;
+    for (Lane& lane : d.lanes)
+      if (lane.pending) more = count_results(d, lane, rest) || more;
+    if (more) wait(d, rest);
     for (Lane& lane : d.lanes) {
-      if (!lane.pending) continue;
-      if (grid(lane)) {
-        finish_grid(lane);
-      } else {
-        finish_compacted(d, lane);
-      }
+      lane.ran = lane.pending;
       lane.pending = false;
     }
   }
@@ -763,39 +824,61 @@ class OpenClExecutor final : public RayExecutor {
           },
           tbb::simple_partitioner());
     }
-    if (batch.iterative) full_ = nullptr;
+    if (!batch.iterative) return;
+    // The devices' counters, summed on this thread.
+    for (const Device& d : devices_) {
+      if (full_) add_counted(d.lanes[0], *full_);
+      add_counted(d.lanes[1], batch);
+    }
+    full_ = nullptr;
   }
 
-  // Device i's jobs of a batch: their outcomes into their slots, settled,
-  // and where their kept rays are, for the next step.
+  static void add_counted(const Lane& lane, RayBatch& batch) {
+    if (!lane.ran) return;
+    RayTally counted;
+    counted += lane.host_total[0];
+    batch.counted += counted;
+  }
+
+  // Device i's jobs of a batch: their kept outcomes rebuilt in their slots
+  // (the watched ones from the rays the walks start from, the reports
+  // whole, in their places), their records counted, and where their kept
+  // rays are, for the next step.
   void deliver(uint32_t i, const Lane& lane, RayBatch& batch) {
     Device& d = devices_[i];
     for (size_t l = 0; l < lane.batch_jobs.size(); ++l) {
       const uint32_t j = lane.batch_jobs[l];
       const RayJob& job = batch.jobs[j];
-      d.work.jobs += lane.host_jobs[l].item_count > 0;
+      const rtcd_device_job& dj = lane.host_jobs[l];
+      d.work.jobs += dj.item_count > 0;
       std::vector<RayOutcome>& out = batch.outcomes[j];
-      if (lane.ray_count == 0) {  // nothing ran there: no ray list was laid out, and nothing is kept
+      RayTally& tally = batch.tallies[j];
+      tally = {};
+      tally.place = int32_t(i);
+      out.clear();
+      if (lane.ray_count == 0) {  // nothing ran there, and nothing is kept
         if (job.residence) *job.residence = {runtime_->place_on_device ? step_ : 0, i, 0, true};
-        out.clear();
-      } else {
-        if (job.residence)
-          *job.residence = {runtime_->place_on_device ? step_ : 0, i,
-                            lane.kept_base + (grid(lane) ? lane.host_first_items[l] : lane.host_first_rays[l]), true};
-        if (grid(lane)) {  // the flagged items' outcomes, in item order, which is ray order
-          const rtcd_device_job& dj = lane.host_jobs[l];
-          out.clear();
-          out.reserve(lane.host_counts[l]);
-          for (uint32_t i = dj.first_item; i < dj.first_item + dj.item_count; ++i)
-            if (lane.host_flags[i]) out.push_back(lane.host_outcomes[i]);
-        } else {
-          const rtcd_outcome* first = lane.host_outcomes.data() + lane.host_first_rays[l];
-          out.assign(first, first + lane.host_counts[l]);
-        }
-        d.work.rays += lane.host_counts[l];
+        continue;
       }
-      batch.tallies[j] = settle_outcomes(out, job.iterative);
-      batch.tallies[j].place = int32_t(i);
+      const uint32_t first = grid(lane) ? lane.host_first_items[l] : lane.host_first_rays[l];
+      if (job.residence) *job.residence = {runtime_->place_on_device ? step_ : 0, i, lane.kept_base + first, true};
+      const rtcd_job_summary& s = lane.host_summaries[l];
+      const int target_kind = data_.table[dj.target].kind;
+      out.resize(s.kept);
+      for (uint32_t k = 0; k < s.kept; ++k) {
+        const rtcd_tracked& r = lane.host_kept[first + k];
+        RayOutcome& o = out[k];
+        rtcd_outcome_init(&o, r.vertex);
+        o.triangle = r.triangle;
+        o.entry = r.entry;
+        o.kind = RTCD_RAY_WATCHED;
+        o.edge = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, r.vertex));
+      }
+      const rtcd_report* report = lane.host_reports.data() + lane.host_first_reports[l];
+      for (uint32_t k = 0; k < s.contacts + s.predictive; ++k) out[report[k].place] = report[k].outcome;
+      tally.contacts = s.contacts;
+      tally.predictive = s.predictive;
+      d.work.rays += s.rays;
     }
   }
 

@@ -225,10 +225,9 @@ class CpuExecutor final : public RayExecutor {
   void trace(const RayJob& job, const rtcd_trace_params& params, const rtcd_candidate& c, RayOutcome& o) const {
     rtcd_outcome_init(&o, c.vertex);
     const Shape& target = *shapes_[job.target];
-    const bool edge = c.vertex >= params.first_edge;
     if (const Mesh* mesh = target.mesh()) {
       const rtcd_tracer tracer{tracers_[job.target].get(), mesh};
-      if (edge) {
+      if (rtcd_item_kind(RTCD_TARGET_MESH, &params, c.vertex) != RTCD_ITEM_ORIGIN) {
         rtcd_edge_trace(&tracer, &params, &c, &o);
       } else if (job.iterative) {
         rtcd_walk_trace(&tracer, &params, &c, &o);
@@ -247,9 +246,10 @@ class CpuExecutor final : public RayExecutor {
         kind = RTCD_TARGET_BOX;
         half = to_kernel(box->half_extents.cast<float>().eval());
       }
-      if (edge && params.source_radius > 0.0f) {
+      const int item = rtcd_item_kind(kind, &params, c.vertex);
+      if (item == RTCD_ITEM_SPHERE) {
         rtcd_sphere_trace(kind, radius, half, &params, &c, &o);
-      } else if (edge) {
+      } else if (item == RTCD_ITEM_EDGE) {
         rtcd_edge_volume_trace(kind, radius, half, &params, &c, &o);
       } else {
         rtcd_volume_trace(kind, radius, half, &params, &c, &o);

@@ -417,6 +417,7 @@ void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out)
   prepare(pairs, out);
   out.stats.seconds_prepare = lap();
   executor_->begin_step();
+  for (Batch b : {kTraced, kWalked}) batches_[b].counted = {};
   for (Batch b : {kTraced, kWalked}) {
     executor_->execute(batches_[b]);
     (b == kWalked ? out.stats.seconds_iterative : out.stats.seconds_full) = lap();
@@ -679,6 +680,7 @@ void PipelineNarrowPhase::gather(std::span<const BodyPair> pairs, StepResult& ou
     outcomes += batch.outcomes[w.first].size() + batch.outcomes[w.first + 1].size();
     step += pair;
   }
+  for (Batch b : {kTraced, kWalked}) static_cast<RayCounts&>(step) += batches_[b].counted;
   static_cast<RayCounts&>(out.stats) = step;
   out.contacts.resize(contacts);
   out.predictive.resize(predictive);
@@ -933,12 +935,33 @@ RayTally& RayTally::operator+=(const RayTally& o) {
   return *this;
 }
 
+RayTally& RayTally::operator+=(const rtcd_tally& t) {
+  contacts += t.contacts;
+  predictive += t.predictive;
+  candidates += t.candidates;
+  rays_full += t.rays_full;
+  rays_predictive += t.rays_predictive;
+  rays_iterative += t.rays_iterative;
+  walk_steps += t.walk_steps;
+  nearest_queries += t.nearest_queries;
+  rays_retraced += t.rays_retraced;
+  rays_watched += t.rays_watched;
+  fold_casts += t.fold_casts;
+  edges_tested += t.edges_tested;
+  edges_skipped += t.edges_skipped;
+  edge_rays += t.edge_rays;
+  edge_contacts += t.edge_contacts;
+  for (int e = 0; e < kLineStatusCount; ++e) walk_endings[e] += t.walk_endings[e];
+  return *this;
+}
+
 RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative) {
-  RayTally tally;
+  rtcd_tally counted;
+  rtcd_tally_clear(&counted);
   size_t kept = 0;
   for (size_t i = 0; i < outcomes.size(); ++i) {
     const RayOutcome& o = outcomes[i];
-    tally.count(o, iterative);
+    rtcd_tally_count(&counted, &o, iterative);
     if (o.kind == RTCD_RAY_DROPPED) continue;
     // Walks keep nearly every ray: no copy onto itself (a store the next
     // load would wait for).
@@ -946,6 +969,8 @@ RayTally settle_outcomes(std::vector<RayOutcome>& outcomes, bool iterative) {
     ++kept;
   }
   outcomes.resize(kept);
+  RayTally tally;
+  tally += counted;
   return tally;
 }
 

@@ -205,12 +205,13 @@ TEST_P(SteadyStep, AllocatesNothing) {
   if (backend.starts_with("opencl")) {
     // The OpenCL runtime's own, reported: not ours to remove. Bounded by
     // the commands a step enqueues, not by its pairs or rays: PoCL makes
-    // 412-416 a step in full mode and about 220 walking, for one pair and
-    // for 64 alike (fewer in a process whose runtime ran before); one
-    // allocation per pair (64 more) or per ray would pass the ceiling.
+    // about 570 a step in full mode and 345 walking with 64 pairs on two
+    // devices, 285 and 173 with one pair on one (fewer in a process whose
+    // runtime ran before); one allocation per pair (64 more) or per ray
+    // would pass the ceiling.
     RecordProperty("runtime_mallocs_per_step", std::to_string(made.heap / 10));
     std::cout << "OpenCL runtime: " << made.heap / 10 << " heap allocations a step\n";
-    EXPECT_LE(made.heap / 10, 450u) << "the OpenCL runtime's allocations a step";
+    EXPECT_LE(made.heap / 10, 600u) << "the OpenCL runtime's allocations a step";
   } else {
     EXPECT_EQ(made.heap, 0u) << "heap allocations in 10 steady steps";
   }

@@ -291,6 +291,41 @@ TEST(OpenCl, DeviceCommandsAreCountedPerStep) {
   EXPECT_LT(walking[0].bytes_from, walking[1].bytes_from);
 }
 
+// A walking step's outcomes are counted and laid out on the device: what
+// comes back is the step's counters, a summary a job, the outcomes that
+// report (contacts, predictive rays) whole, each with its place, and every
+// other kept ray as the next walk starts from it (12 bytes: vertex, exit
+// and entry triangles), not every candidate's 32-byte outcome and flag.
+// The CPU's output, counters included, is unchanged (the bit-for-bit
+// suites); a wrong place or a lost watched ray would show there.
+TEST(OpenCl, WalksReadBackReportsWholeAndOtherKeptRaysAsWalkStarts) {
+  const size_t pairs = 16;
+  const auto steps = run_scene("opencl:devices=1", {"concave", Mode::iterative, pairs, 6});
+  expect_ran_on_devices(steps, 1);
+  constexpr size_t kCounters = 8 * 23, kSummary = 16, kKept = 12, kReport = 36;
+  size_t walked = 0, reported = 0;
+  for (size_t s = 2; s < steps.size(); ++s) {
+    SCOPED_TRACE("step " + std::to_string(s));
+    const StepResult& last = steps[s - 1];
+    const StepStats& st = steps[s].stats;
+    ASSERT_EQ(st.pairs_iterative, pairs);
+    // This step walks every ray the last one kept.
+    const size_t reports = last.contacts.size() + last.predictive.size();
+    const size_t items = reports + last.stats.rays_watched;
+    EXPECT_LE(st.devices[0].rays, items);
+    // The reports are read up to a bound guessed from the last step's.
+    const size_t report_read = std::min<size_t>(items, size_t(1.25 * double(reports)) + 64);
+    EXPECT_EQ(st.bytes_from_device, kCounters + kSummary * 2 * pairs + kKept * items + kReport * report_read);
+    EXPECT_EQ(st.device_waits, 1u);
+    walked += items;
+    reported += steps[s].contacts.size() + steps[s].predictive.size();
+  }
+  // The scene reports a part of what it walks, and the rest comes back as
+  // walk starts.
+  EXPECT_GT(reported, 0u);
+  EXPECT_LT(reported, walked);
+}
+
 // A step waits once a device: the device lays out the full batch's ray
 // list itself, the walks are enqueued behind it, and the host reads the
 // counts and the outcomes (up to a bound guessed from the last full batch)

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "rtcd/kernel/classify.h"
+#include "rtcd/kernel/tally.h"
 #include "rtcd/kernel/tracer.h"
 #include "rtcd/limits.hpp"
 #include "rtcd/narrow_phase.hpp"
@@ -72,35 +73,8 @@ struct RayJob {
 struct RayTally : RayCounts {
   size_t contacts = 0, predictive = 0;
 
-  void count(const RayOutcome& o, bool iterative) {
-    contacts += o.kind == RTCD_RAY_PENETRATING;
-    rays_watched += o.kind == RTCD_RAY_WATCHED;
-    if (o.edge) {
-      ++edges_tested;
-      // A watched mesh edge that needs no ray: clear of the surface by more
-      // than the pair has moved (its clearance rides in entry), or found
-      // clear by its first walking step's nearest query. An edge against a
-      // sphere or a box, tested in closed form, casts none either.
-      edges_skipped += o.edge == RTCD_ITEM_EDGE && o.edge_rays == 0 && (o.nearest_query || o.entry >= 0);
-      edge_rays += o.edge_rays;
-      nearest_queries += o.nearest_query;
-      edge_contacts += o.kind == RTCD_RAY_PENETRATING;
-      return;
-    }
-    ++candidates;
-    predictive += o.kind == RTCD_RAY_PREDICTIVE;
-    rays_predictive += o.predictive_cast;
-    nearest_queries += o.nearest_query;
-    rays_retraced += o.retraced;
-    fold_casts += o.fold_cast;
-    if (iterative) {
-      ++rays_iterative;
-      walk_steps += o.walk_steps;
-      ++walk_endings[o.status];
-    } else {
-      ++rays_full;
-    }
-  }
+  // Outcomes counted by the executors' one rule (kernel/tally.h).
+  RayTally& operator+=(const rtcd_tally& counted);
   // A held watched edge, still tracked (Config::edge_retest_motion).
   void hold() {
     ++edges_held;
@@ -130,6 +104,10 @@ struct RayBatch {
   std::vector<RayJob> jobs;
   std::vector<std::vector<RayOutcome>> outcomes;
   std::vector<RayTally> tallies;
+  // What an executor counted on its own (a device reduces its outcomes
+  // there), beside its jobs' tallies, which then hold only their records.
+  // Cleared by the pipeline before each step's batches.
+  RayCounts counted;
 
   // `count` jobs, their outcome buffers kept from earlier steps.
   void resize(size_t count) {
@@ -158,7 +136,11 @@ class RayExecutor {
   // RTCD_RAY_DROPPED, or RTCD_RAY_WATCHED when it stays tracked (its
   // `triangle` is where the next walk starts). batch.outcomes[j] and
   // batch.tallies[j] receive what settle_outcomes makes of them; the
-  // executor only clears and fills them. Each step executes its full batch,
+  // executor only clears and fills them. An executor that counts on its
+  // own (a device) leaves only the records (contacts, predictive) in the
+  // tallies and adds the counters into batch.counted; a kept outcome that
+  // reports nothing then need hold only what a walk starts from (vertex,
+  // triangle, entry, and its kind and edge). Each step executes its full batch,
   // then its walked one; the full batch's outcomes may be left to be filled
   // by the walked batch's call (an executor that runs both at once, as a
   // device does, waits for them together).

@@ -92,6 +92,15 @@ RTCD_INLINE void rtcd_outcome_init(rtcd_outcome* o, rtcd_uint vertex) {
   o->nearest = -1;
 }
 
+/* The rtcd_outcome::edge a job's item gets: which test the executors'
+ * dispatch runs it through. Items from first_edge on are edges, tested by
+ * rtcd_edge_trace against a mesh; against a volume, a sphere source's item
+ * is its deepest point (rtcd_sphere_trace), any other an edge. */
+RTCD_INLINE int rtcd_item_kind(int target_kind, const rtcd_trace_params* p, rtcd_uint item) {
+  if (item < p->first_edge) return RTCD_ITEM_ORIGIN;
+  return target_kind != RTCD_TARGET_MESH && p->source_radius > 0.0f ? RTCD_ITEM_SPHERE : RTCD_ITEM_EDGE;
+}
+
 RTCD_INLINE int rtcd_inside_box(rtcd_vec3 p, rtcd_vec3 lo, rtcd_vec3 hi) {
   return p.x >= lo.x && p.y >= lo.y && p.z >= lo.z && p.x <= hi.x && p.y <= hi.y && p.z <= hi.z;
 }

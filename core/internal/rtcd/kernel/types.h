@@ -19,6 +19,7 @@
 typedef uint rtcd_uint;
 typedef int rtcd_int;
 typedef uchar rtcd_uchar;
+typedef ulong rtcd_ulong;
 /* Double precision where the device has it (the ray origins' placement);
  * the host places rays for a device without it. */
 #if defined(cl_khr_fp64) && !defined(RTCD_NO_FP64)
@@ -38,6 +39,7 @@ typedef uchar rtcd_uchar;
 typedef uint32_t rtcd_uint;
 typedef int32_t rtcd_int;
 typedef uint8_t rtcd_uchar;
+typedef uint64_t rtcd_ulong;
 #define RTCD_HAS_DOUBLE 1
 #endif
 
