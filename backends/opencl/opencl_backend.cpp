@@ -711,6 +711,9 @@ class OpenClExecutor final : public RayExecutor {
     uint32_t rays = 0, reports = 0;
     for (size_t l = 0; l < jobs; ++l) {
       const rtcd_job_summary& s = lane.host_summaries[l];
+      // The device's counts place what the host reads: they must fit.
+      if (s.kept > s.rays || s.contacts + s.predictive > s.kept || s.rays > lane.host_jobs[l].item_count)
+        throw Error("a device returned inconsistent counts for job " + std::to_string(l));
       lane.host_first_rays[l] = rays;
       lane.host_first_reports[l] = reports;
       rays += s.rays;
@@ -875,7 +878,10 @@ class OpenClExecutor final : public RayExecutor {
         o.edge = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, r.vertex));
       }
       const rtcd_report* report = lane.host_reports.data() + lane.host_first_reports[l];
-      for (uint32_t k = 0; k < s.contacts + s.predictive; ++k) out[report[k].place] = report[k].outcome;
+      for (uint32_t k = 0; k < s.contacts + s.predictive; ++k) {
+        if (report[k].place >= s.kept) throw Error("a device returned a report out of place for job " + std::to_string(l));
+        out[report[k].place] = report[k].outcome;
+      }
       tally.contacts = s.contacts;
       tally.predictive = s.predictive;
       d.work.rays += s.rays;
