@@ -164,18 +164,53 @@ __kernel void rtcd_count(__global const rtcd_device_job* jobs, rtcd_uint job_cou
   counts[j] = n;
 }
 
+/* The job scans (rtcd_offsets, rtcd_total) run as one work-group of up to
+ * this many work-items (the host's kGroupSize): each takes a share of the
+ * jobs in order, the shares' sums are scanned in local memory, and each
+ * work-item writes its share's prefixes, so no single work-item reads every
+ * job (a batch holds thousands). Integer sums: any split gives the same. */
+#define RTCD_SCAN_WIDTH 64
+
+/* Work-item `lid` of `width`: its share [*begin, *end) of n jobs. */
+RTCD_INLINE void rtcd_scan_share(rtcd_uint n, rtcd_uint lid, rtcd_uint width, rtcd_uint* begin, rtcd_uint* end) {
+  rtcd_uint chunk = (n + width - 1) / width;
+  *begin = min(n, lid * chunk);
+  *end = min(n, *begin + chunk);
+}
+
+/* The shares' sums in place of their exclusive prefixes; returns the total. */
+RTCD_INLINE rtcd_uint rtcd_scan_shares(__local rtcd_uint* partial, rtcd_uint width) {
+  rtcd_uint k, sum = 0;
+  for (k = 0; k < width; ++k) {
+    rtcd_uint c = partial[k];
+    partial[k] = sum;
+    sum += c;
+  }
+  return sum;
+}
+
 /* The batch's ray list laid out on the device: each job's first ray (an
  * exclusive prefix sum of the counts) and, after the last job, the total,
  * which bounds rtcd_trace, so no count goes through the host before the
- * trace. One work-item: a batch holds a few thousand jobs at most. */
+ * trace. One work-group. */
 __kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* first_rays) {
-  rtcd_uint j, n = 0;
-  if (get_global_id(0) != 0) return;
-  for (j = 0; j < job_count; ++j) {
+  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+  const rtcd_uint lid = get_local_id(0), width = min((rtcd_uint)get_local_size(0), (rtcd_uint)RTCD_SCAN_WIDTH);
+  rtcd_uint j, begin = 0, end = 0, n = 0;
+  if (lid < width) {
+    rtcd_scan_share(job_count, lid, width, &begin, &end);
+    for (j = begin; j < end; ++j) n += counts[j];
+    partial[lid] = n;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid == 0) first_rays[job_count] = rtcd_scan_shares(partial, width);
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid >= width) return;
+  n = partial[lid];
+  for (j = begin; j < end; ++j) {
     first_rays[j] = n;
     n += counts[j];
   }
-  first_rays[job_count] = n;
 }
 
 /* One item: a candidate moves to its place in the batch's ray list. */
@@ -318,29 +353,51 @@ __kernel void rtcd_settle(__global const rtcd_device_job* jobs, rtcd_uint job_co
   tallies[j] = t;
 }
 
-/* One work-item: each job's first report (its contacts and predictive rays
- * laid out one job after another) and what the host reads of it, and the
- * batch's counters summed. */
+/* Each job's first report (its contacts and predictive rays laid out one
+ * job after another) and what the host reads of it, and the batch's
+ * counters summed. One work-group, as rtcd_offsets. */
 __kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count, __global rtcd_uint* first_reports,
                          __global rtcd_job_summary* summaries, __global rtcd_tally* total) {
-  rtcd_uint j, n = 0;
-  rtcd_tally sum;
-  if (get_global_id(0) != 0) return;
-  rtcd_tally_clear(&sum);
-  for (j = 0; j < job_count; ++j) {
-    rtcd_tally t = tallies[j];
-    rtcd_job_summary s;
-    s.rays = (rtcd_uint)(t.candidates + t.edges_tested);
-    s.kept = (rtcd_uint)t.kept;
-    s.contacts = (rtcd_uint)t.contacts;
-    s.predictive = (rtcd_uint)t.predictive;
-    summaries[j] = s;
-    first_reports[j] = n;
-    n += s.contacts + s.predictive;
-    rtcd_tally_add(&sum, &t);
+  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+  __local rtcd_tally sums[RTCD_SCAN_WIDTH];
+  const rtcd_uint lid = get_local_id(0), width = min((rtcd_uint)get_local_size(0), (rtcd_uint)RTCD_SCAN_WIDTH);
+  rtcd_uint j, k, begin = 0, end = 0, n = 0;
+  if (lid < width) {
+    rtcd_tally sum;
+    rtcd_tally_clear(&sum);
+    rtcd_scan_share(job_count, lid, width, &begin, &end);
+    for (j = begin; j < end; ++j) {
+      rtcd_tally t = tallies[j];
+      rtcd_job_summary s;
+      s.rays = (rtcd_uint)(t.candidates + t.edges_tested);
+      s.kept = (rtcd_uint)t.kept;
+      s.contacts = (rtcd_uint)t.contacts;
+      s.predictive = (rtcd_uint)t.predictive;
+      summaries[j] = s;
+      n += s.contacts + s.predictive;
+      rtcd_tally_add(&sum, &t);
+    }
+    partial[lid] = n;
+    sums[lid] = sum;
   }
-  first_reports[job_count] = n;
-  *total = sum;
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid == 0) {
+    rtcd_tally all;
+    rtcd_tally_clear(&all);
+    for (k = 0; k < width; ++k) {
+      rtcd_tally t = sums[k];
+      rtcd_tally_add(&all, &t);
+    }
+    *total = all;
+    first_reports[job_count] = rtcd_scan_shares(partial, width);
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid >= width) return;
+  n = partial[lid];
+  for (j = begin; j < end; ++j) {
+    first_reports[j] = n;
+    n += summaries[j].contacts + summaries[j].predictive;
+  }
 }
 
 /* One job: its outcomes that report (contacts and predictive rays), in
