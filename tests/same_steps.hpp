@@ -121,6 +121,7 @@ inline void expect_same_placement(const StepStats& a, const StepStats& b, const 
   SCOPED_TRACE(where);
   EXPECT_EQ(a.bytes_to_device, b.bytes_to_device);
   EXPECT_EQ(a.bytes_from_device, b.bytes_from_device);
+  EXPECT_EQ(a.bytes_recovery, b.bytes_recovery);
   ASSERT_EQ(a.devices.size(), b.devices.size());
   for (size_t d = 0; d < a.devices.size(); ++d) {
     EXPECT_EQ(a.devices[d].jobs, b.devices[d].jobs) << "device " << d;

@@ -115,6 +115,7 @@ void print_device_traffic(const std::vector<Sum>& sums) {
   row("blocking waits", &DeviceWork::waits, 1, " %.1f |");
   row("KB to the devices", &DeviceWork::bytes_to_device, 1e-3, " %.1f |");
   row("KB from the devices", &DeviceWork::bytes_from_device, 1e-3, " %.1f |");
+  row("KB recovery reads", &DeviceWork::bytes_recovery, 1e-3, " %.1f |");
   row("kernels (device ms)", &DeviceWork::seconds_kernels, 1e3, " %.3f |");
   row("copies (device ms)", &DeviceWork::seconds_copies, 1e3, " %.3f |");
 }

@@ -33,6 +33,7 @@ nlohmann::json stats_json(const StepStats& s) {
                        {"waits", d.waits},
                        {"bytes_to_device", d.bytes_to_device},
                        {"bytes_from_device", d.bytes_from_device},
+                       {"bytes_recovery", d.bytes_recovery},
                        {"seconds_kernels", d.seconds_kernels},
                        {"seconds_copies", d.seconds_copies}});
   nlohmann::json j = {{"walk_endings", endings},

@@ -55,11 +55,12 @@ typedef struct {
   rtcd_uint place;
 } rtcd_report;
 
-/* What the host reads of a job: its rays, the kept ones among them, and
- * those that report. */
+/* What the host reads of a job: its rays, the kept ones among them (the
+ * vertex rays first), and those that report. */
 typedef struct {
   rtcd_uint rays;
   rtcd_uint kept;
+  rtcd_uint kept_origins;
   rtcd_uint contacts;
   rtcd_uint predictive;
 } rtcd_job_summary;

@@ -371,6 +371,7 @@ __kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count
       rtcd_job_summary s;
       s.rays = (rtcd_uint)(t.candidates + t.edges_tested);
       s.kept = (rtcd_uint)t.kept;
+      s.kept_origins = (rtcd_uint)t.kept_origins;
       s.contacts = (rtcd_uint)t.contacts;
       s.predictive = (rtcd_uint)t.predictive;
       summaries[j] = s;

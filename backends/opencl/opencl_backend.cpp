@@ -18,11 +18,14 @@
 //      tracking stay on the device for the next step's walks; its outcomes
 //      are counted there (kernel/tally.h), and those that report (contacts,
 //      predictive rays) are laid out by job. After one wait the host reads
-//      the counters, a summary a job, the reports whole and the kept rays
-//      as the walks start from them (each up to a bound guessed from the
-//      last batch; past it, a second read and wait), and rebuilds each
-//      job's kept outcomes in its slot, so the step is in job order (jobs
-//      and frames go up; no other outcome comes down).
+//      the counters, a summary a job and the reports whole (up to a bound
+//      guessed from the last batch; past it, a second read and wait), and
+//      builds each job's kept outcomes in its slot: the reports in their
+//      places, placeholders (kind and edge) for the rest, so the step is in
+//      job order (jobs and frames go up; no other outcome comes down).
+//   5. The kept rays' walk starts are read back on a second queue that
+//      nothing waits for (bytes_recovery), unless the host reorders a
+//      pair's rays (recover) or the CPU takes a step over from a fault.
 // The grid layout (iterative batches) does 1 and 3 in one kernel,
 // rtcd_trace_items: each item placed and, if a candidate, traced in place.
 // Any fault (no platform, a failed build, out of memory, a device error)
@@ -36,6 +39,8 @@
 
 #include <algorithm>
 #include <iostream>
+#include <mutex>
+#include <utility>
 
 #include "device_types.h"
 #include "rtcd/error.hpp"
@@ -50,10 +55,12 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
 static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
-static_assert(sizeof(rtcd_report) == 36 && sizeof(rtcd_job_summary) == 16 && sizeof(rtcd_tally) == 8 * 23);
+static_assert(sizeof(rtcd_report) == 36 && sizeof(rtcd_job_summary) == 20 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
 
 constexpr size_t kGroupSize = 64;
+// A kept outcome's vertex until its walk start is recovered.
+constexpr rtcd_uint kPlaceholder = ~rtcd_uint(0);
 
 // A device buffer that keeps its capacity from step to step.
 struct GrowingBuffer {
@@ -89,14 +96,13 @@ struct Lane {
   std::vector<rtcd_job_summary> host_summaries;
   std::vector<rtcd_uint> host_first_reports;
   std::vector<rtcd_report> host_reports;
-  std::vector<rtcd_tracked> host_kept;
+  std::vector<rtcd_tracked> host_kept;  // the host placed the rays: it reads them whole
   uint32_t items = 0, ray_count = 0, report_count = 0;
   uint32_t last_reports = 0;  // report_count the step before (0: it did not run)
-  // The reads made before the counts are known: the kept rays up to
-  // read_bound (compacted layout: guessed from the last batch's rays per
-  // item) and the reports up to report_bound (guessed likewise).
-  uint32_t read_bound = 0, report_bound = 0;
-  double rays_per_item = 0, reports_per_item = 0;
+  // The reports are read before they are counted, up to report_bound
+  // (guessed from the last batch's reports per item).
+  uint32_t report_bound = 0;
+  double reports_per_item = 0;
   size_t load = 0;
   uint32_t upload_base = 0;  // the batch's uploaded tracked rays in the read buffer
   uint32_t kept_base = 0;    // the batch's kept rays in the written buffer
@@ -127,6 +133,12 @@ struct Device {
   std::vector<Timed> timed;
   Lane lanes[2];  // by batch: full, walked
   size_t group_size = 1;
+  // The recovery reads: the kept rays' walk starts, by step parity as
+  // `kept`, read on a queue of their own that the step never waits for.
+  cl::CommandQueue recovery;
+  std::vector<rtcd_tracked> recovered[2];
+  std::vector<cl::Event> recovering[2];
+  size_t early_waits = 0;  // waits for them before begin_step, counted in the step
 };
 
 class OpenClExecutor final : public RayExecutor {
@@ -147,6 +159,8 @@ class OpenClExecutor final : public RayExecutor {
       for (const cl::Device& d : runtime_->devices) {
         Device device;
         device.queue = cl::CommandQueue(runtime_->context, d, CL_QUEUE_PROFILING_ENABLE);
+        device.recovery = cl::CommandQueue(runtime_->context, d);
+        for (auto& events : device.recovering) events.reserve(2);
         if (runtime_->place_on_device) {
           device.list = cl::Kernel(runtime_->program, "rtcd_list");
           device.select = cl::Kernel(runtime_->program, "rtcd_select");
@@ -185,6 +199,7 @@ class OpenClExecutor final : public RayExecutor {
     for (Device& d : devices_) {
       d.kept_used[step_ % 2] = 0;
       d.work = {};
+      d.work.waits = std::exchange(d.early_waits, 0);
     }
   }
 
@@ -204,8 +219,9 @@ class OpenClExecutor final : public RayExecutor {
       }
     }
     // The CPU takes over from the jobs, the full batch's too when it was
-    // still on a device.
+    // still on a device; walks start from the rays the devices kept.
     on_cpu_ = true;
+    if (batch.iterative) take_over_walks(batch);
     if (full_ && full_ != &batch) {
       full_->counted = {};
       cpu().execute(*full_);
@@ -213,6 +229,10 @@ class OpenClExecutor final : public RayExecutor {
     full_ = nullptr;
     batch.counted = {};
     cpu().execute(batch);
+  }
+
+  void recover(const Residence& residence, std::span<RayOutcome> tracked) override {
+    fill_walk_starts(residence, step_, tracked, true);
   }
 
   void account(StepStats& stats) const override {
@@ -225,6 +245,7 @@ class OpenClExecutor final : public RayExecutor {
       stats.device_waits += w.waits;
       stats.bytes_to_device += w.bytes_to_device;
       stats.bytes_from_device += w.bytes_from_device;
+      stats.bytes_recovery += w.bytes_recovery;
       stats.seconds_device_kernels += w.seconds_kernels;
       stats.seconds_device_copies += w.seconds_copies;
     }
@@ -236,10 +257,63 @@ class OpenClExecutor final : public RayExecutor {
   // already being handled.
   void settle() {
     for (Device& d : devices_) {
-      try {
-        d.queue.finish();
-      } catch (...) {
+      for (cl::CommandQueue* q : {&d.queue, &d.recovery}) {
+        try {
+          if ((*q)()) q->finish();
+        } catch (...) {
+        }
       }
+    }
+  }
+
+  // The recovery reads of step parity `parity` finished; `early`: before
+  // the step's begin_step, so counted in the next step's waits. Throws
+  // when one failed: the walk starts are lost.
+  static void wait_recovered(Device& d, size_t parity, bool early) {
+    for (cl::Event& e : d.recovering[parity]) {
+      cl_int status = e.getInfo<CL_EVENT_COMMAND_EXECUTION_STATUS>();
+      if (status > CL_COMPLETE) {
+        e.wait();
+        ++(early ? d.early_waits : d.work.waits);
+        status = e.getInfo<CL_EVENT_COMMAND_EXECUTION_STATUS>();
+      }
+      if (status < 0) throw Error("a device could not read back its tracked rays (OpenCL status " + std::to_string(status) + ")");
+    }
+  }
+
+  // The walk starts of the placeholders this executor left in a direction's
+  // kept outcomes, when its devices kept them at step `written`, from the
+  // recovery reads (waited for, once a step whoever asks first).
+  void fill_walk_starts(const Residence& r, uint64_t written, std::span<RayOutcome> tracked, bool early) {
+    if (!runtime_ || !runtime_->place_on_device || r.step == 0 || r.step != written || r.place >= devices_.size())
+      return;
+    Device& d = devices_[r.place];
+    const size_t parity = written % 2;
+    {
+      std::lock_guard lock(recovering_);
+      wait_recovered(d, parity, early);
+    }
+    const std::vector<rtcd_tracked>& starts = d.recovered[parity];
+    const size_t count = std::min<size_t>(r.count, tracked.size());
+    if (size_t(r.first) + count > starts.size()) throw Error("tracked rays past a device's recovery read");
+    for (size_t k = 0; k < count; ++k) {
+      const rtcd_tracked& s = starts[r.first + k];
+      tracked[k].vertex = s.vertex;
+      tracked[k].triangle = s.triangle;
+      tracked[k].entry = s.entry;
+    }
+  }
+
+  // A walked batch the CPU runs: its jobs' tracked rays that the devices
+  // kept last step, with their walk starts, in copies of the executor's.
+  void take_over_walks(RayBatch& batch) {
+    if (taken_over_.size() < batch.jobs.size()) taken_over_.resize(batch.jobs.size());
+    for (size_t j = 0; j < batch.jobs.size(); ++j) {
+      RayJob& job = batch.jobs[j];
+      if (!job.residence || job.residence->step == 0 || job.residence->step + 1 != step_) continue;
+      taken_over_[j].assign(job.tracked.begin(), job.tracked.end());
+      fill_walk_starts(*job.residence, step_ - 1, taken_over_[j], false);
+      job.tracked = taken_over_[j];
     }
   }
 
@@ -424,7 +498,10 @@ class OpenClExecutor final : public RayExecutor {
     } else {
       dj.first_tracked = lane.upload_base + rtcd_uint(lane.host_tracked.size());
       if (job.iterative && items > 0) {
-        for (const RayOutcome& r : job.tracked) lane.host_tracked.push_back({r.vertex, r.triangle, r.entry});
+        for (const RayOutcome& r : job.tracked) {
+          if (r.vertex == kPlaceholder) throw Error("a tracked ray to upload was never recovered");
+          lane.host_tracked.push_back({r.vertex, r.triangle, r.entry});
+        }
       }
     }
     lane.batch_jobs.push_back(j);
@@ -494,10 +571,11 @@ class OpenClExecutor final : public RayExecutor {
   // A fixed work-group size, the global size rounded up to it (kernels
   // ignore the excess): drivers such as PoCL compile a kernel again for
   // every new work-group size they would pick themselves.
-  static void launch(Device& d, cl::Kernel& k, size_t n) {
+  // `after`: events of other queues it waits for.
+  static void launch(Device& d, cl::Kernel& k, size_t n, const std::vector<cl::Event>* after = nullptr) {
     const size_t group = d.group_size;
     d.queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((n + group - 1) / group * group), cl::NDRange(group),
-                                 nullptr, timed(d, true));
+                                 after, timed(d, true));
     ++d.work.launches;
   }
 
@@ -531,12 +609,13 @@ class OpenClExecutor final : public RayExecutor {
 
   // After the trace, on the device: each job's kept rays written past
   // kept_base at the place of its items (grid) or rays (compacted), which
-  // the residences record, and its outcomes counted (rtcd_settle); its
-  // reports laid out (rtcd_total, rtcd_reports). Then the reads: the
-  // counters, the summaries, the kept rays up to `kept_read` and the
-  // reports up to a bound guessed from the last batch. Room is made for
-  // `count` rays, an upper bound when they are not counted yet.
-  void settle(Device& d, Lane& lane, const GrowingBuffer& firsts, uint32_t count, uint32_t kept_read) {
+  // the residences record, once the recovery reads of two steps ago have
+  // read that buffer, and its outcomes counted (rtcd_settle); its reports
+  // laid out (rtcd_total, rtcd_reports). Then the reads: the counters, the
+  // summaries, the reports up to a bound guessed from the last batch, and,
+  // where the host placed the rays, the kept rays. Room is made for `count`
+  // rays, an upper bound when they are not counted yet.
+  void settle(Device& d, Lane& lane, const GrowingBuffer& firsts, uint32_t count) {
     const auto jobs_count = rtcd_uint(lane.host_jobs.size());
     GrowingBuffer& kept = d.kept[step_ % 2];
     uint32_t& used = d.kept_used[step_ % 2];
@@ -559,7 +638,7 @@ class OpenClExecutor final : public RayExecutor {
     };
     cl::Kernel& s = d.settle;
     set_args(s, bind_job_rays(s), lane.kept_base, kept.buffer, lane.tallies.buffer);
-    launch(d, s, jobs_count);
+    launch(d, s, jobs_count, &d.recovering[step_ % 2]);
     cl::Kernel& t = d.total;
     set_args(t, 0, lane.tallies.buffer, jobs_count, lane.first_reports.buffer, lane.summaries.buffer,
              lane.total.buffer);
@@ -569,13 +648,14 @@ class OpenClExecutor final : public RayExecutor {
     launch(d, r, jobs_count);
     lane.host_total.resize(1);
     lane.host_summaries.resize(jobs_count);
-    lane.host_kept.resize(count);
     lane.host_reports.resize(count);
-    lane.read_bound = kept_read;
     lane.report_bound = std::min<uint32_t>(count, uint32_t(1.25 * expected_reports(d, lane)) + 64);
     read(d, lane.total, lane.host_total);
     read(d, lane.summaries, lane.host_summaries);
-    read(d, kept, lane.kept_base, lane.host_kept, 0, kept_read);
+    if (!runtime_->place_on_device) {
+      lane.host_kept.resize(count);
+      read(d, kept, lane.kept_base, lane.host_kept, 0, count);
+    }
     read(d, lane.reports, 0, lane.host_reports, 0, lane.report_bound, &lane.outcomes_read);
   }
 
@@ -610,7 +690,7 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(next + 8, lane.flags.buffer);
     k.setArg(next + 9, lane.outcomes.buffer);
     launch(d, k, lane.items);
-    settle(d, lane, lane.first_items, lane.items, lane.items);
+    settle(d, lane, lane.first_items, lane.items);
   }
 
   // Phase 1, on the device: a full batch's items listed; for the compacted
@@ -674,8 +754,7 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // The compacted layout on the device: candidates scattered and traced
-  // with no count known on the host (the launch covers every item); the
-  // kept rays are read up to a bound guessed from the last batch.
+  // with no count known on the host (the launch covers every item).
   void trace_compacted(Device& d, Lane& lane) {
     reserve(lane.rays, lane.items * sizeof(rtcd_candidate));
     cl::Kernel& k = d.scatter;
@@ -689,8 +768,7 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(7, lane.rays.buffer);
     launch(d, k, lane.items);
     enqueue_trace(d, lane, lane.items);
-    settle(d, lane, lane.first_rays, lane.items,
-           std::min<uint32_t>(lane.items, uint32_t(1.25 * lane.rays_per_item * lane.items) + 64));
+    settle(d, lane, lane.first_rays, lane.items);
   }
 
   // A batch's reports, guessed before they are counted. Walks: last step's
@@ -702,8 +780,8 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // After the wait: each job's first ray and report from the summaries, and
-  // what the guessed bounds left unread, enqueued behind `last`; returns
-  // whether there was any.
+  // the reports the guessed bound left unread, enqueued behind `last`;
+  // returns whether there were any.
   bool count_results(Device& d, Lane& lane, cl::Event& last) {
     const size_t jobs = lane.host_summaries.size();
     lane.host_first_rays.resize(jobs + 1);
@@ -721,18 +799,10 @@ class OpenClExecutor final : public RayExecutor {
     }
     lane.host_first_rays[jobs] = lane.ray_count = rays;
     lane.host_first_reports[jobs] = lane.report_count = reports;
-    lane.rays_per_item = double(rays) / lane.items;
     lane.reports_per_item = double(reports) / lane.items;
-    bool more = false;
-    if (!grid(lane) && rays > lane.read_bound) {
-      read(d, d.kept[step_ % 2], lane.kept_base, lane.host_kept, lane.read_bound, rays - lane.read_bound, &last);
-      more = true;
-    }
-    if (reports > lane.report_bound) {
-      read(d, lane.reports, 0, lane.host_reports, lane.report_bound, reports - lane.report_bound, &last);
-      more = true;
-    }
-    return more;
+    if (reports <= lane.report_bound) return false;
+    read(d, lane.reports, 0, lane.host_reports, lane.report_bound, reports - lane.report_bound, &last);
+    return true;
   }
 
   // One device's share of a batch, enqueued and flushed; nothing waits.
@@ -762,7 +832,7 @@ class OpenClExecutor final : public RayExecutor {
       write(d, lane.counts, lane.host_counts);
       write(d, lane.rays, lane.host_rays);
       enqueue_trace(d, lane, lane.ray_count);
-      settle(d, lane, lane.first_rays, lane.ray_count, lane.ray_count);
+      settle(d, lane, lane.first_rays, lane.ray_count);
     }
     d.queue.flush();
     lane.pending = true;
@@ -786,6 +856,29 @@ class OpenClExecutor final : public RayExecutor {
       lane.ran = lane.pending;
       lane.pending = false;
     }
+    read_for_recovery(d);
+  }
+
+  // The walk starts of the rays the device kept this step, read on the
+  // recovery queue into the host's copy of `kept`, place for place;
+  // nothing waits for them (fill_walk_starts may). Where the host placed
+  // the rays it has them already.
+  void read_for_recovery(Device& d) {
+    if (!runtime_->place_on_device) return;
+    const size_t parity = step_ % 2;
+    wait_recovered(d, parity, false);  // two steps ago, into the same host memory: long done
+    d.recovering[parity].clear();
+    std::vector<rtcd_tracked>& starts = d.recovered[parity];
+    starts.resize(d.kept_used[parity]);
+    for (const Lane& lane : d.lanes) {
+      if (!lane.ran || lane.ray_count == 0) continue;
+      const size_t count = grid(lane) ? lane.items : lane.ray_count;
+      d.recovery.enqueueReadBuffer(d.kept[parity].buffer, CL_FALSE, lane.kept_base * sizeof(rtcd_tracked),
+                                   count * sizeof(rtcd_tracked), starts.data() + lane.kept_base, nullptr,
+                                   &d.recovering[parity].emplace_back());
+      d.work.bytes_recovery += count * sizeof(rtcd_tracked);
+    }
+    d.recovery.flush();
   }
 
   // The step's full batch is enqueued and left to run; the walked one
@@ -843,10 +936,10 @@ class OpenClExecutor final : public RayExecutor {
     batch.counted += counted;
   }
 
-  // Device i's jobs of a batch: their kept outcomes rebuilt in their slots
-  // (the watched ones from the rays the walks start from, the reports
-  // whole, in their places), their records counted, and where their kept
-  // rays are, for the next step.
+  // Device i's jobs of a batch: their kept outcomes built in their slots
+  // (the reports whole, in their places; the others placeholders, or
+  // whole where the host placed the rays), their records counted, and
+  // where their kept rays are, for the next step.
   void deliver(uint32_t i, const Lane& lane, RayBatch& batch) {
     Device& d = devices_[i];
     for (size_t l = 0; l < lane.batch_jobs.size(); ++l) {
@@ -859,23 +952,30 @@ class OpenClExecutor final : public RayExecutor {
       tally = {};
       tally.place = int32_t(i);
       out.clear();
+      const uint64_t kept_step = runtime_->place_on_device ? step_ : 0;
       if (lane.ray_count == 0) {  // nothing ran there, and nothing is kept
-        if (job.residence) *job.residence = {runtime_->place_on_device ? step_ : 0, i, 0, true};
+        if (job.residence) *job.residence = {kept_step, i, 0, 0, true};
         continue;
       }
       const uint32_t first = grid(lane) ? lane.host_first_items[l] : lane.host_first_rays[l];
-      if (job.residence) *job.residence = {runtime_->place_on_device ? step_ : 0, i, lane.kept_base + first, true};
       const rtcd_job_summary& s = lane.host_summaries[l];
+      if (s.kept_origins > s.kept) throw Error("a device returned inconsistent counts for job " + std::to_string(l));
+      if (job.residence) *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true};
       const int target_kind = data_.table[dj.target].kind;
+      const auto edge_kind = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, dj.params.first_edge));
       out.resize(s.kept);
       for (uint32_t k = 0; k < s.kept; ++k) {
-        const rtcd_tracked& r = lane.host_kept[first + k];
         RayOutcome& o = out[k];
-        rtcd_outcome_init(&o, r.vertex);
-        o.triangle = r.triangle;
-        o.entry = r.entry;
+        if (runtime_->place_on_device) {
+          rtcd_outcome_init(&o, kPlaceholder);
+        } else {
+          const rtcd_tracked& r = lane.host_kept[first + k];
+          rtcd_outcome_init(&o, r.vertex);
+          o.triangle = r.triangle;
+          o.entry = r.entry;
+        }
         o.kind = RTCD_RAY_WATCHED;
-        o.edge = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, r.vertex));
+        o.edge = k < s.kept_origins ? rtcd_uchar(RTCD_ITEM_ORIGIN) : edge_kind;
       }
       const rtcd_report* report = lane.host_reports.data() + lane.host_first_reports[l];
       for (uint32_t k = 0; k < s.contacts + s.predictive; ++k) {
@@ -904,6 +1004,8 @@ class OpenClExecutor final : public RayExecutor {
   uint64_t step_ = 0;     // begin_step calls
   bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback
   RayBatch* full_ = nullptr;  // the step's full batch, enqueued and not finished
+  std::mutex recovering_;     // one waiter for a device's recovery reads
+  std::vector<std::vector<RayOutcome>> taken_over_;  // walks the CPU took over, by job
 };
 }  // namespace
 }  // namespace rtcd::opencl

@@ -587,6 +587,9 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
 std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d, bool hold) const {
   std::vector<RayOutcome>& tracked = state.tracked[d];
   if (!hold && !state.held[d] && config_.edges_beside_contacts) return tracked;  // the default: every ray walks
+  // The rays are reordered, copied or handed over anew below: their walk
+  // starts, not the executor's placeholders.
+  executor_->recover(state.residence[d], tracked);
   const auto edges = std::find_if(tracked.begin(), tracked.end(), [](const RayOutcome& o) { return o.edge != 0; });
   const bool mesh_edges =
       std::all_of(edges, tracked.end(), [](const RayOutcome& o) { return o.edge == RTCD_ITEM_EDGE; });

@@ -167,6 +167,9 @@ struct DeviceWork {
   size_t writes = 0, reads = 0;  // copies enqueued from the host, to the host
   size_t waits = 0;  // times the host blocked until the device was done with something
   size_t bytes_to_device = 0, bytes_from_device = 0;
+  // Bytes read back apart, without a wait: the tracked rays' walk starts,
+  // which the host waits for only to reorder them or to take a pair over.
+  size_t bytes_recovery = 0;
   // Run time of its kernels and of its copies, each command from its start
   // to its end on the device. A command still running when the step ends (the
   // kernel keeping the tracked rays, enqueued after the last read) is
@@ -183,6 +186,7 @@ struct DeviceWork {
     waits += o.waits;
     bytes_to_device += o.bytes_to_device;
     bytes_from_device += o.bytes_from_device;
+    bytes_recovery += o.bytes_recovery;
     seconds_kernels += o.seconds_kernels;
     seconds_copies += o.seconds_copies;
     return *this;
@@ -194,7 +198,7 @@ struct StepStats : RayCounts {
   size_t pairs_full = 0, pairs_iterative = 0;
   size_t fallbacks_to_full = 0;
   size_t pairs_certified = 0, certificates_granted = 0, certificates_expired = 0;
-  size_t bytes_to_device = 0, bytes_from_device = 0;
+  size_t bytes_to_device = 0, bytes_from_device = 0, bytes_recovery = 0;
   // Over the devices (DeviceWork): kernels enqueued, copies each way,
   // blocking waits; their kernels' and copies' device time.
   size_t device_launches = 0, device_writes = 0, device_reads = 0, device_waits = 0;
@@ -237,7 +241,11 @@ inline constexpr StepCounter kStepCounters[] = {
     {"certificates_expired", &StepStats::certificates_expired,
      "certified pairs whose motion passed their margin, traced in full this step"},
     {"bytes_to_device", &StepStats::bytes_to_device, "bytes copied from the host to the devices (0 on the CPU)"},
-    {"bytes_from_device", &StepStats::bytes_from_device, "bytes copied from the devices to the host (0 on the CPU)"},
+    {"bytes_from_device", &StepStats::bytes_from_device,
+     "bytes copied from the devices to the host, the recovery reads apart (0 on the CPU)"},
+    {"bytes_recovery", &StepStats::bytes_recovery,
+     "bytes of tracked rays read back from the devices without a wait, waited for only when the host reorders them "
+     "or the CPU takes a pair over"},
     {"device_launches", &StepStats::device_launches, "kernels enqueued on the devices (0 on the CPU)"},
     {"device_writes", &StepStats::device_writes, "copies enqueued from the host to the devices"},
     {"device_reads", &StepStats::device_reads, "copies enqueued from the devices to the host"},

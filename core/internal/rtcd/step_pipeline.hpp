@@ -27,7 +27,8 @@ namespace rtcd {
 // the walk starts, -1 for a watched vertex whose nearest triangle is looked
 // up when the pair walks; `entry`: a penetrating ray's entry face, -1
 // unknown). The host keeps them with the pair's state, so any executor can
-// take over a pair without tracing it again.
+// take over a pair without tracing it again; an executor that keeps them
+// where they ran may leave placeholders there (RayExecutor::recover).
 using RayOutcome = rtcd_outcome;
 
 // Where an executor ran a pair-direction and left its tracked rays after a
@@ -39,6 +40,7 @@ struct Residence {
   uint64_t step = 0;    // the executor's step (begin_step) that wrote the rays; 0: none
   uint32_t place = 0;   // where, in the executor's numbering (a device)
   uint32_t first = 0;   // the first of the rays there
+  uint32_t count = 0;   // how many: the first `count` kept outcomes
   bool placed = false;  // the pair-direction has run at `place`
 
   void drop_rays() { step = 0; }
@@ -138,13 +140,21 @@ class RayExecutor {
   // batch.tallies[j] receive what settle_outcomes makes of them; the
   // executor only clears and fills them. An executor that counts on its
   // own (a device) leaves only the records (contacts, predictive) in the
-  // tallies and adds the counters into batch.counted; a kept outcome that
-  // reports nothing then need hold only what a walk starts from (vertex,
-  // triangle, entry, and its kind and edge). Each step executes its full batch,
+  // tallies and adds the counters into batch.counted; an executor that
+  // keeps the tracked rays where they ran (a device, the job's residence)
+  // may fill a kept outcome that reports nothing with its kind and edge
+  // alone, a placeholder whose walk start (vertex, triangle, entry) only
+  // recover gives. Each step executes its full batch,
   // then its walked one; the full batch's outcomes may be left to be filled
   // by the walked batch's call (an executor that runs both at once, as a
   // device does, waits for them together).
   virtual void execute(RayBatch& batch) = 0;
+  // Before the next step's batches (begin_step): the walk starts of a
+  // pair-direction's kept outcomes, where this step left placeholders, so
+  // the host can reorder, copy or hand them elsewhere. `tracked` is the
+  // direction's kept outcomes as execute left them, `residence` its note.
+  // Executors that deliver whole outcomes have nothing to do.
+  virtual void recover(const Residence& /*residence*/, std::span<RayOutcome> /*tracked*/) {}
   // After the step's batches: where its rays ran and what moving them took
   // (StepStats::devices, their sums, ::cpu_fallback), so a host or a test
   // can tell a device's work from a fallback's. The CPU executors have

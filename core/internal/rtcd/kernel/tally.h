@@ -8,9 +8,10 @@
 #include "tracer.h"
 
 /* The fields of rtcd::RayTally that outcomes count (edges_held is the
- * host's), and the job's kept outcomes (all but the dropped ones). */
+ * host's), and the job's kept outcomes (all but the dropped ones), of which
+ * kept_origins are vertex rays (they come before the edges). */
 typedef struct {
-  rtcd_ulong contacts, predictive, kept;
+  rtcd_ulong contacts, predictive, kept, kept_origins;
   rtcd_ulong candidates, rays_full, rays_predictive, rays_iterative, walk_steps;
   rtcd_ulong nearest_queries, rays_retraced, rays_watched, fold_casts;
   rtcd_ulong edges_tested, edges_skipped, edge_rays, edge_contacts;
@@ -19,7 +20,7 @@ typedef struct {
 
 RTCD_INLINE void rtcd_tally_clear(rtcd_tally* t) {
   int e;
-  t->contacts = t->predictive = t->kept = 0;
+  t->contacts = t->predictive = t->kept = t->kept_origins = 0;
   t->candidates = t->rays_full = t->rays_predictive = t->rays_iterative = t->walk_steps = 0;
   t->nearest_queries = t->rays_retraced = t->rays_watched = t->fold_casts = 0;
   t->edges_tested = t->edges_skipped = t->edge_rays = t->edge_contacts = 0;
@@ -31,6 +32,7 @@ RTCD_INLINE void rtcd_tally_add(rtcd_tally* t, const rtcd_tally* o) {
   t->contacts += o->contacts;
   t->predictive += o->predictive;
   t->kept += o->kept;
+  t->kept_origins += o->kept_origins;
   t->candidates += o->candidates;
   t->rays_full += o->rays_full;
   t->rays_predictive += o->rays_predictive;
@@ -51,6 +53,7 @@ RTCD_INLINE void rtcd_tally_add(rtcd_tally* t, const rtcd_tally* o) {
 RTCD_INLINE void rtcd_tally_count(rtcd_tally* t, const rtcd_outcome* o, int iterative) {
   t->contacts += o->kind == RTCD_RAY_PENETRATING;
   t->kept += o->kind != RTCD_RAY_DROPPED;
+  t->kept_origins += o->kind != RTCD_RAY_DROPPED && !o->edge;
   t->rays_watched += o->kind == RTCD_RAY_WATCHED;
   if (o->edge) {
     ++t->edges_tested;
