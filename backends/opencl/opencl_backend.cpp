@@ -877,6 +877,7 @@ class OpenClExecutor final : public RayExecutor {
                                    count * sizeof(rtcd_tracked), starts.data() + lane.kept_base, nullptr,
                                    &d.recovering[parity].emplace_back());
       d.work.bytes_recovery += count * sizeof(rtcd_tracked);
+      ++d.work.reads;
     }
     d.recovery.flush();
   }

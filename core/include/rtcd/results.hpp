@@ -164,7 +164,7 @@ struct DeviceWork {
   size_t jobs = 0;  // pair-directions it ran, those with ray origins to try
   size_t rays = 0;  // candidate rays it traced or walked
   size_t launches = 0;  // kernels enqueued
-  size_t writes = 0, reads = 0;  // copies enqueued from the host, to the host
+  size_t writes = 0, reads = 0;  // copies enqueued from the host, to the host (recovery reads too)
   size_t waits = 0;  // times the host blocked until the device was done with something
   size_t bytes_to_device = 0, bytes_from_device = 0;
   // Bytes read back apart, without a wait: the tracked rays' walk starts,
