@@ -579,6 +579,10 @@ class OpenClExecutor final : public RayExecutor {
     ++d.work.launches;
   }
 
+  // One work-group: the job scans (rtcd_offsets, rtcd_total), whose
+  // work-items share the jobs among them.
+  static void launch_group(Device& d, cl::Kernel& k) { launch(d, k, d.group_size); }
+
   // `args` as a kernel's arguments from index `first` on; returns the next index.
   template <class... Args>
   static cl_uint set_args(cl::Kernel& k, cl_uint first, const Args&... args) {
@@ -642,7 +646,7 @@ class OpenClExecutor final : public RayExecutor {
     cl::Kernel& t = d.total;
     set_args(t, 0, lane.tallies.buffer, jobs_count, lane.first_reports.buffer, lane.summaries.buffer,
              lane.total.buffer);
-    launch(d, t, 1);
+    launch_group(d, t);
     cl::Kernel& r = d.report;
     set_args(r, bind_job_rays(r), lane.first_reports.buffer, lane.reports.buffer);
     launch(d, r, jobs_count);
@@ -750,7 +754,7 @@ class OpenClExecutor final : public RayExecutor {
     o.setArg(0, lane.counts.buffer);
     o.setArg(1, jobs_count);
     o.setArg(2, lane.first_rays.buffer);
-    launch(d, o, 1);
+    launch_group(d, o);
   }
 
   // The compacted layout on the device: candidates scattered and traced
