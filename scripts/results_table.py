@@ -428,20 +428,19 @@ def opencl_rows():
 
 def pocl_avalanche_rows():
     """Phase C of the avalanche replays on PoCL: detect against Embree (and
-    the peers, where the file replayed them), and the bytes a step from the
-    devices before and after, from a file whose header names its date,
-    commit and machine."""
-    source = "opencl/reports_on_device.txt"
+    the peers, where the file replayed them), and the bytes a step each way,
+    from a file whose header names its date, commit and machine."""
+    source = "opencl/recovery_reads.txt"
     where = f"{RESULTS}/{source}"
-    text = read_text("opencl", "reports_on_device.txt")
+    text = read_text("opencl", "recovery_reads.txt")
     stamp = {}
     for key in ("date", "commit", "machine"):
         found = re.search(rf"^# {key}: (.+)$", text, re.M)
         if not found:
             raise ResultError(f"{where}: no '# {key}:' line")
         stamp[key] = found.group(1).strip()
-    detect = {"new": [], "old": [], "embree": [], "gimpact": [], "fcl": []}
-    read_back = {"new": [], "old": []}
+    detect = {"new": [], "embree": [], "gimpact": [], "fcl": []}
+    traffic = {"KB to the devices": [], "KB from the devices": [], "KB recovery reads": []}
     for section in re.split(r"^## ", text, flags=re.M)[1:]:
         who = section.split()[0]
         row = re.search(r"^\| C \| \d+ \| ([0-9.]+) \|", section, re.M)
@@ -449,25 +448,26 @@ def pocl_avalanche_rows():
             if not row:
                 raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no phase C row")
             detect[who].append(float(row.group(1)))
-        if who in read_back:
-            kb = re.search(r"^\| KB from the devices \| [0-9.]+ \| [0-9.]+ \| ([0-9.]+) \|", section, re.M)
-            if not kb:
-                raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no 'KB from the devices' row")
-            read_back[who].append(float(kb.group(1)))
-    if not detect["new"] or not detect["embree"] or not read_back["old"]:
-        raise ResultError(f"{where}: no 'new', 'old' or 'embree' replay")
+        if who == "new":
+            for name, values in traffic.items():
+                kb = re.search(rf"^\| {name} \| [0-9.]+ \| [0-9.]+ \| ([0-9.]+) \|", section, re.M)
+                if not kb:
+                    raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no '{name}' row")
+                values.append(float(kb.group(1)))
+    if not detect["new"] or not detect["embree"]:
+        raise ResultError(f"{where}: no 'new' or 'embree' replay")
     opencl, embree = statistics.median(detect["new"]), statistics.median(detect["embree"])
     value = f"{opencl:.1f} ÷ {embree:.1f} ms: {opencl / embree:.2f}×"
     peers = [f"{name} {statistics.median(detect[key]):.1f} ms" for key, name in (("gimpact", "GIMPACT"), ("fcl", "FCL"))
              if detect[key]]
     if peers:
         value += " (one thread, the same steps: " + ", ".join(peers) + ")"
-    before, after = statistics.median(read_back["old"]), statistics.median(read_back["new"])
+    up, down, recovery = (statistics.median(v) / 1000 for v in traffic.values())
     return [Row("avalanche phase C detect on PoCL: OpenCL on one `basic` device ÷ Embree on one thread (floor 1.5×)",
                 value, "opencl", source, [stamp]),
-            Row("avalanche phase C, bytes a step from the device, before → after the outcomes are counted and "
-                "laid out there (floor: 64 × (contacts + predictive rays) + 16 × pairs, the kept rays' copy apart)",
-                f"{before / 1000:.2f} → {after / 1000:.2f} MB", "opencl", source, [stamp])]
+            Row("avalanche phase C, bytes a step on PoCL: from the device (floor: 64 × (contacts + predictive rays) + "
+                "16 × pairs); the walk starts' recovery reads, apart; to the device (floor: 64 × bodies + 16 × pairs)",
+                f"{down:.2f} MB; {recovery:.2f} MB; {up:.2f} MB", "opencl", source, [stamp])]
 
 
 def gpu_rows():
