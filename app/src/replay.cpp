@@ -20,7 +20,7 @@ struct Sum {
   std::string name;
   uint64_t steps = 0, peak_step = 0;
   double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
-  size_t pairs = 0, pairs_full = 0, fallbacks = 0, contacts = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+  size_t pairs = 0, pairs_full = 0, fallbacks = 0, contacts = 0, predictive = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
   size_t missed_pairs = 0, truth_checked = 0, over_reports = 0;
   size_t certified = 0, granted = 0, expired = 0;
   RayCounts counts;
@@ -46,6 +46,7 @@ struct Sum {
     counts += s.counts;
     for (const DeviceWork& d : s.devices) devices += d;
     contacts += s.contacts;
+    predictive += s.predictive;
     judged += s.judged;
     deep += s.deep;
     missed += s.missed;
@@ -104,20 +105,23 @@ void print_device_traffic(const std::vector<Sum>& sums) {
   std::printf("\n| :-- |");
   for (size_t i = 0; i < sums.size(); ++i) std::printf(" --: |");
   std::printf("\n");
-  const auto row = [&](const char* name, auto field, double scale, const char* format) {
+  const auto row = [&](const char* name, auto value, const char* format) {
     std::printf("| %s |", name);
-    for (const Sum& s : sums) std::printf(format, scale * double(s.devices.*field) / double(std::max<uint64_t>(s.steps, 1)));
+    for (const Sum& s : sums) std::printf(format, value(s) / double(std::max<uint64_t>(s.steps, 1)));
     std::printf("\n");
   };
-  row("kernel launches", &DeviceWork::launches, 1, " %.1f |");
-  row("writes", &DeviceWork::writes, 1, " %.1f |");
-  row("reads", &DeviceWork::reads, 1, " %.1f |");
-  row("blocking waits", &DeviceWork::waits, 1, " %.1f |");
-  row("KB to the devices", &DeviceWork::bytes_to_device, 1e-3, " %.1f |");
-  row("KB from the devices", &DeviceWork::bytes_from_device, 1e-3, " %.1f |");
-  row("KB recovery reads", &DeviceWork::bytes_recovery, 1e-3, " %.1f |");
-  row("kernels (device ms)", &DeviceWork::seconds_kernels, 1e3, " %.3f |");
-  row("copies (device ms)", &DeviceWork::seconds_copies, 1e3, " %.3f |");
+  const auto work = [](auto field, double scale) { return [=](const Sum& s) { return scale * double(s.devices.*field); }; };
+  row("kernel launches", work(&DeviceWork::launches, 1), " %.1f |");
+  row("writes", work(&DeviceWork::writes, 1), " %.1f |");
+  row("reads", work(&DeviceWork::reads, 1), " %.1f |");
+  row("blocking waits", work(&DeviceWork::waits, 1), " %.1f |");
+  row("KB to the devices", work(&DeviceWork::bytes_to_device, 1e-3), " %.1f |");
+  row("KB from the devices", work(&DeviceWork::bytes_from_device, 1e-3), " %.1f |");
+  row("KB recovery reads", work(&DeviceWork::bytes_recovery, 1e-3), " %.1f |");
+  // What a step must bring back at least: its records.
+  row("reports (contacts + predictive rays)", [](const Sum& s) { return double(s.contacts + s.predictive); }, " %.0f |");
+  row("kernels (device ms)", work(&DeviceWork::seconds_kernels, 1e3), " %.3f |");
+  row("copies (device ms)", work(&DeviceWork::seconds_copies, 1e3), " %.3f |");
 }
 
 }  // namespace

@@ -87,6 +87,7 @@ class OursRunner final : public Runner {
     out.devices = s.devices;
     out.cpu_fallback = s.cpu_fallback;
     out.contacts = result_.contacts.size();
+    out.predictive = result_.predictive.size();
     for (const PairResult& p : result_.pairs) out.colliding += p.colliding;
     for (const Contact& c : result_.contacts) out.depth_sum += c.depth;
     out.contact_digest = digest(result_.contacts);

@@ -25,8 +25,13 @@ std::shared_ptr<const Runtime> runtime() {
   return opencl::acquire_runtime(opencl::Selection{}, OpenClFault::none);
 }
 
-// One work-group, as the executor launches the scans.
-void run_one_group(const Runtime& rt, cl::Kernel& k) {
+// Scan kernel `name` over `jobs` jobs as the executor launches it: one
+// work-group; its arguments the first buffer, the job count, the others.
+void run_scan(const Runtime& rt, const char* name, size_t jobs, const std::vector<cl::Buffer>& buffers) {
+  cl::Kernel k(rt.program, name);
+  k.setArg(0, buffers[0]);
+  k.setArg(1, rtcd_uint(jobs));
+  for (size_t i = 1; i < buffers.size(); ++i) k.setArg(cl_uint(i + 1), buffers[i]);
   const cl::Device& device = rt.devices.front();
   const size_t group = std::min(kGroupSize, k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device));
   cl::CommandQueue queue(rt.context, device);
@@ -52,12 +57,8 @@ TEST(OpenClScans, OffsetsAreTheHostsPrefixSumAroundGroupMultiples) {
     SCOPED_TRACE(std::to_string(jobs) + " jobs");
     std::vector<rtcd_uint> counts(jobs), first_rays(jobs + 1, 0xdeadbeef);
     for (rtcd_uint& c : counts) c = count(g);
-    cl::Buffer counts_buffer = buffer_of(*rt, counts), firsts_buffer = buffer_of(*rt, first_rays);
-    cl::Kernel k(rt->program, "rtcd_offsets");
-    k.setArg(0, counts_buffer);
-    k.setArg(1, rtcd_uint(jobs));
-    k.setArg(2, firsts_buffer);
-    run_one_group(*rt, k);
+    const cl::Buffer firsts_buffer = buffer_of(*rt, first_rays);
+    run_scan(*rt, "rtcd_offsets", jobs, {buffer_of(*rt, counts), firsts_buffer});
     read_back(*rt, firsts_buffer, first_rays);
     rtcd_uint sum = 0;
     for (size_t j = 0; j < jobs; ++j) {
@@ -92,15 +93,9 @@ TEST(OpenClScans, TotalsAreTheHostsSumsAroundGroupMultiples) {
     std::vector<rtcd_uint> first_reports(jobs + 1, 0xdeadbeef);
     std::vector<rtcd_job_summary> summaries(jobs);
     std::vector<rtcd_tally> total(1);
-    cl::Buffer tallies_buffer = buffer_of(*rt, tallies), firsts_buffer = buffer_of(*rt, first_reports);
-    cl::Buffer summaries_buffer = buffer_of(*rt, summaries), total_buffer = buffer_of(*rt, total);
-    cl::Kernel k(rt->program, "rtcd_total");
-    k.setArg(0, tallies_buffer);
-    k.setArg(1, rtcd_uint(jobs));
-    k.setArg(2, firsts_buffer);
-    k.setArg(3, summaries_buffer);
-    k.setArg(4, total_buffer);
-    run_one_group(*rt, k);
+    const cl::Buffer firsts_buffer = buffer_of(*rt, first_reports), summaries_buffer = buffer_of(*rt, summaries);
+    const cl::Buffer total_buffer = buffer_of(*rt, total);
+    run_scan(*rt, "rtcd_total", jobs, {buffer_of(*rt, tallies), firsts_buffer, summaries_buffer, total_buffer});
     read_back(*rt, firsts_buffer, first_reports);
     read_back(*rt, summaries_buffer, summaries);
     read_back(*rt, total_buffer, total);

@@ -48,6 +48,7 @@ struct ReplayStep {
   double seconds_prepare = 0, seconds_full = 0, seconds_iterative = 0, seconds_gather = 0;
   double seconds_rays() const { return seconds_full + seconds_iterative; }
   size_t pairs = 0, colliding = 0, contacts = 0;
+  size_t predictive = 0;  // ours: predictive rays reported
   size_t pairs_full = 0, pairs_iterative = 0;
   size_t fallbacks = 0;  // of pairs_full, those equation 2.1 sent back (the rest are new)
   // Ours: pairs skipped on a certificate, certificates granted, expired (StepStats).
