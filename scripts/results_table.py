@@ -440,7 +440,9 @@ def pocl_avalanche_rows():
             raise ResultError(f"{where}: no '# {key}:' line")
         stamp[key] = found.group(1).strip()
     detect = {"new": [], "embree": [], "gimpact": [], "fcl": []}
-    traffic = {"KB to the devices": [], "KB from the devices": [], "KB recovery reads": []}
+    traffic = {"KB to the devices": [], "KB from the devices": [], "KB recovery reads": [],
+               "reports \\(contacts \\+ predictive rays\\)": []}
+    pairs = []
     for section in re.split(r"^## ", text, flags=re.M)[1:]:
         who = section.split()[0]
         row = re.search(r"^\| C \| \d+ \| ([0-9.]+) \|", section, re.M)
@@ -449,6 +451,7 @@ def pocl_avalanche_rows():
                 raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no phase C row")
             detect[who].append(float(row.group(1)))
         if who == "new":
+            pairs.append(float(re.search(r"^\| C \| \d+ \| (?:[^|]+\|){6} ([0-9.]+) \|", section, re.M).group(1)))
             for name, values in traffic.items():
                 kb = re.search(rf"^\| {name} \| [0-9.]+ \| [0-9.]+ \| ([0-9.]+) \|", section, re.M)
                 if not kb:
@@ -462,12 +465,15 @@ def pocl_avalanche_rows():
              if detect[key]]
     if peers:
         value += " (one thread, the same steps: " + ", ".join(peers) + ")"
-    up, down, recovery = (statistics.median(v) / 1000 for v in traffic.values())
+    up, down, recovery, reports = (statistics.median(v) for v in traffic.values())
+    bound = (64 * reports + 16 * statistics.median(pairs)) / 1e6
     return [Row("avalanche phase C detect on PoCL: OpenCL on one `basic` device ÷ Embree on one thread (floor 1.5×)",
                 value, "opencl", source, [stamp]),
             Row("avalanche phase C, bytes a step on PoCL: from the device (floor: 64 × (contacts + predictive rays) + "
-                "16 × pairs); the walk starts' recovery reads, apart; to the device (floor: 64 × bodies + 16 × pairs)",
-                f"{down:.2f} MB; {recovery:.2f} MB; {up:.2f} MB", "opencl", source, [stamp])]
+                "16 × pairs, from the same run); the walk starts' recovery reads, apart; to the device (floor: "
+                "64 × bodies + 16 × pairs)",
+                f"{down / 1000:.2f} MB (floor {bound:.2f} MB); {recovery / 1000:.2f} MB; {up / 1000:.2f} MB",
+                "opencl", source, [stamp])]
 
 
 def gpu_rows():
