@@ -126,6 +126,7 @@ Steady make_steady(const std::string& backend, Mode mode, int count) {
 struct Allocations {
   size_t heap = 0;  // every one, operator new's included
   size_t cxx = 0;   // through operator new
+  size_t most_heap_in_a_step = 0;  // the busiest step's
 };
 
 // What the measured steps did: contacts of the last, the steps in which
@@ -143,8 +144,11 @@ Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measur
                                         bool begun = false) {
   StepResult result;
   Allocations before;
+  size_t most = 0, step_start = 0;
   for (int step = 0; step < warmup + steps; ++step) {
     if (step == warmup) before = {allocations.load(), cxx_allocations.load()};
+    if (step > warmup) most = std::max(most, allocations.load() - step_start);
+    step_start = allocations.load();
     for (size_t i = 0; i < s.pairs.size(); ++i) {
       Pose p = s.b_poses[i];
       p.position.y() += jitter(step);
@@ -167,8 +171,9 @@ Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measur
                                            [](const DeviceWork& w) { return w.launches > 0; }));
     m.devices = std::max(m.devices, busy);
   }
+  most = std::max(most, allocations.load() - step_start);
   m.contacts = result.contacts.size();
-  return {allocations.load() - before.heap, cxx_allocations.load() - before.cxx};
+  return {allocations.load() - before.heap, cxx_allocations.load() - before.cxx, most};
 }
 // B jittering by 1e-3.
 Allocations allocations_in_steady_steps(Steady& s, int warmup, int steps, Measured& m) {
@@ -222,13 +227,15 @@ TEST_P(SteadyStep, AllocatesNothing) {
   }
 }
 
-// The OpenCL runtime's own allocations a step do not grow
-// with the pairs: one pair and 64, in one process after both warmed up (a
-// runtime's first steps allocate more), make as many per busy device in
-// each mode, within 16 a step: PoCL's pthread devices vary by a few from
-// run to run (about 110 walking, 224 in full; one `basic` device makes
-// exactly as many), and one allocation per pair would add 32 a device. The
-// 64 pairs spread over both devices, the one pair runs on one.
+// The OpenCL runtime's own allocations a step do not grow with the pairs:
+// one pair and 64, in one process after both warmed up (a runtime's first
+// steps allocate more), make as many per busy device in each mode, within
+// 8 in the step that allocates most (284 a device in full, 172 walking, on
+// PoCL's pthread devices). The busiest step, not the mean: a loaded machine
+// lets PoCL skip some of its allocations in some steps (a mean 17 below the
+// usual, seen in CI), never add to them. One allocation per pair would add
+// 32 a device. The 64 pairs spread over both devices, the one pair runs on
+// one.
 TEST(Allocation, OpenClRuntimeAllocatesAsMuchForOnePairAsFor64) {
   for (Mode mode : {Mode::full, Mode::iterative, Mode::automatic}) {
     SCOPED_TRACE(to_string(mode));
@@ -239,13 +246,15 @@ TEST(Allocation, OpenClRuntimeAllocatesAsMuchForOnePairAsFor64) {
     const Allocations a1 = allocations_in_steady_steps(one, 2, 10, m1);
     const Allocations a64 = allocations_in_steady_steps(many, 2, 10, m64);
     ASSERT_GT(m1.devices * m64.devices, 0u) << "no device ran: the comparison would be vacuous";
-    const double per_device1 = double(a1.heap) / double(10 * m1.devices);
-    const double per_device64 = double(a64.heap) / double(10 * m64.devices);
-    std::cout << to_string(mode) << ": " << per_device1 << " and " << per_device64 << " a step and device ("
-              << m1.devices << " and " << m64.devices << " devices)\n";
+    const double per_device1 = double(a1.most_heap_in_a_step) / double(m1.devices);
+    const double per_device64 = double(a64.most_heap_in_a_step) / double(m64.devices);
+    std::cout << to_string(mode) << ": " << per_device1 << " and " << per_device64
+              << " in the busiest step a device, mean " << double(a1.heap) / double(10 * m1.devices) << " and "
+              << double(a64.heap) / double(10 * m64.devices) << " (" << m1.devices << " and " << m64.devices
+              << " devices)\n";
     EXPECT_EQ(a1.cxx, 0u) << "C++ allocations in 10 steps of 1 pair";
     EXPECT_EQ(a64.cxx, 0u) << "C++ allocations in 10 steps of 64 pairs";
-    EXPECT_NEAR(per_device64, per_device1, 16.0) << "the runtime's allocations a step and device, 1 pair against 64";
+    EXPECT_NEAR(per_device64, per_device1, 8.0) << "the runtime's allocations in the busiest step a device, 1 pair against 64";
     EXPECT_GT(a1.heap, 0u) << "the runtime allocated nothing: the comparison would be vacuous";
     EXPECT_GT(m64.contacts, m1.contacts);
   }
