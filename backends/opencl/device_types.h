@@ -37,6 +37,16 @@ typedef struct {
   rtcd_uint first_near;    /* full jobs: the job's words of near-leaf bits */
 } rtcd_device_job;
 
+#ifdef RTCD_HAS_DOUBLE
+/* What makes a job's frame on the device (rtcd_prepare, rtcd_relative_frame):
+ * its bodies, whose poses the step uploads, and its candidate box's growth. */
+typedef struct {
+  rtcd_uint source_body;
+  rtcd_uint target_body;
+  double extension;
+} rtcd_frame_job;
+#endif
+
 /* Whether a full job's near-leaf bits hold source-tree node `leaf`. */
 RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* bits, rtcd_uint leaf) {
   return (int)((bits[leaf / 32] >> (leaf % 32)) & 1u);

@@ -81,17 +81,33 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
   return lo;
 }
 
-/* One full job: the source items (origins, then edges) of its near leaves,
- * in item order, listed as its items (the host counted them). */
-__kernel void rtcd_list(__global const rtcd_device_job* jobs, rtcd_uint job_count,
-                        __global const rtcd_device_shape* shapes, __global const rtcd_uint* source_leaves,
-                        __global const rtcd_uint* near_bits, __global rtcd_uint* vertices) {
+#ifdef RTCD_HAS_DOUBLE
+/* One job, before its items: its frame from its bodies' poses, as the
+ * host's place makes it (rtcd_relative_frame); for a full job, the source
+ * items (origins, then edges) of its near leaves, in item order, listed as
+ * its items (the host counted them). */
+__kernel void rtcd_prepare(__global const rtcd_device_job* jobs, rtcd_uint job_count,
+                           __global const rtcd_device_shape* shapes, __global const rtcd_uint* source_leaves,
+                           __global const rtcd_uint* near_bits, __global rtcd_uint* vertices,
+                           __global const rtcd_frame_job* frame_jobs, __global const rtcd_pose* poses,
+                           __global const rtcd_box* bounds, __global rtcd_frame* frames) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint v, n, count;
   rtcd_device_job job;
+  rtcd_frame_job fj;
+  rtcd_pose source, target;
+  rtcd_box source_bounds, target_bounds;
+  rtcd_frame frame;
   __global const rtcd_uint* leaves;
   if (j >= job_count) return;
   job = jobs[j];
+  fj = frame_jobs[j];
+  source = poses[fj.source_body];
+  target = poses[fj.target_body];
+  source_bounds = bounds[job.source];
+  target_bounds = bounds[job.target];
+  rtcd_relative_frame(&source, &target, &source_bounds, &target_bounds, fj.extension, &frame);
+  frames[j] = frame;
   if (job.params.iterative || job.item_count == 0) return;
   leaves = source_leaves + shapes[job.source].first_source;
   count = shapes[job.source].source_count;
@@ -100,7 +116,6 @@ __kernel void rtcd_list(__global const rtcd_device_job* jobs, rtcd_uint job_coun
     if (rtcd_near_leaf(near_bits + job.first_near, leaves[v])) vertices[n++] = v;
 }
 
-#ifdef RTCD_HAS_DOUBLE
 /* Item i: the possible ray placed in the target's frame (rtcd_place_ray, in
  * double) as candidate c; 1 when it is a candidate. */
 RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jobs,

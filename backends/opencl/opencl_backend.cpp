@@ -1,14 +1,17 @@
 // The OpenCL executor. Shapes are copied to every device once (at the first
-// step after they are added); each step's pair-directions are spread over
-// the devices (a pair that walks stays on the device holding its tracked
-// rays; the others go to the least loaded by expected rays), each device
-// with its own queue, and all devices run at once:
-//   1. rtcd_select: every possible ray (source item: a vertex or an edge,
-//      or tracked ray) placed in the target's frame in double and flagged
-//      when it is a candidate (the host places them when a device lacks
-//      fp64); a full job's possible rays are the items of the source-tree
-//      leaves near its overlap box, which the host finds and sends as one
-//      bit per node, and rtcd_list lists in item order;
+// step after they are added), the bodies' poses once a step; each step's
+// pair-directions are spread over the devices (a pair that walks stays on
+// the device holding its tracked rays; the others go to the least loaded
+// by expected rays), each device with its own queue, and all devices run
+// at once:
+//   1. rtcd_prepare: each job's frame made from its bodies' poses by the
+//      host's own function (kernel/frame.h), then rtcd_select: every
+//      possible ray (source item: a vertex or an edge, or tracked ray)
+//      placed in the target's frame in double and flagged when it is a
+//      candidate (the host makes the frames and places the rays when a
+//      device lacks fp64); a full job's possible rays are the items of the
+//      source-tree leaves near its overlap box, which the host finds and
+//      sends as one bit per node, and rtcd_prepare lists in item order;
 //   2. rtcd_count and rtcd_offsets: per job, a prefix sum over the flags,
 //      then one over the jobs, so the candidates form a compacted list in
 //      the CPU's order, laid out on the device;
@@ -22,7 +25,7 @@
 //      guessed from the last batch; past it, a second read and wait), and
 //      builds each job's kept outcomes in its slot: the reports in their
 //      places, placeholders (kind and edge) for the rest, so the step is in
-//      job order (jobs and frames go up; no other outcome comes down).
+//      job order (poses and jobs go up; no other outcome comes down).
 //   5. The kept rays' walk starts are read back on a second queue that
 //      nothing waits for (bytes_recovery), unless the host reorders a
 //      pair's rays (recover) or the CPU takes a step over from a fault.
@@ -72,7 +75,7 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
-  kPrimitives, kOrigins, kDirections, kSourceLeaves
+  kPrimitives, kOrigins, kDirections, kSourceLeaves, kBounds
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -80,13 +83,14 @@ constexpr size_t kTracedShapeBuffers = kOrigins;
 // buffers they use. A step's two batches have a lane each, so the full
 // batch runs on the device while the walks are set up.
 struct Lane {
-  GrowingBuffer jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
+  GrowingBuffer jobs, first_items, frame_jobs, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
   GrowingBuffer tallies, first_reports, summaries, total, reports;
   // The jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
   std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
-  std::vector<rtcd_frame> host_frames;
+  std::vector<rtcd_frame_job> host_frame_jobs;  // the device makes the frames (rtcd_prepare)
+  std::vector<rtcd_frame> host_frames;          // the host places the rays: it makes them
   std::vector<rtcd_uint> host_near;  // full jobs' near-leaf bits, by source-tree node
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
@@ -113,10 +117,12 @@ struct Lane {
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel list, select, count, offsets, scatter, trace, trace_items, settle, total, report;
+  cl::Kernel prepare, select, count, offsets, scatter, trace, trace_items, settle, total, report;
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
+  GrowingBuffer poses;         // every body's, the step's (rtcd_pose)
+  uint64_t poses_written = 0;  // the step they are
   // Tracked rays that stay on the device, by step parity: the step's
   // batches append what they keep to one (rtcd_settle) while its walks read
   // the other, written the step before, with the rays that came from
@@ -162,7 +168,7 @@ class OpenClExecutor final : public RayExecutor {
         device.recovery = cl::CommandQueue(runtime_->context, d);
         for (auto& events : device.recovering) events.reserve(2);
         if (runtime_->place_on_device) {
-          device.list = cl::Kernel(runtime_->program, "rtcd_list");
+          device.prepare = cl::Kernel(runtime_->program, "rtcd_prepare");
           device.select = cl::Kernel(runtime_->program, "rtcd_select");
           device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
         }
@@ -175,7 +181,7 @@ class OpenClExecutor final : public RayExecutor {
         device.report = cl::Kernel(runtime_->program, "rtcd_reports");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
-             {&device.list, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
+             {&device.prepare, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
               &device.trace_items, &device.settle, &device.total, &device.report})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
@@ -193,8 +199,9 @@ class OpenClExecutor final : public RayExecutor {
     shapes_.push_back(std::move(shape));
   }
 
-  void begin_step() override {
+  void begin_step(std::span<const rtcd_pose> poses) override {
     ++step_;
+    poses_ = poses;
     on_cpu_ = false;
     for (Device& d : devices_) {
       d.kept_used[step_ % 2] = 0;
@@ -352,7 +359,8 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.neighbors),  upload_once(data_.zero_area),  upload_once(data_.normals),
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
-                upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves)};
+                upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves),
+                upload_once(data_.bounds)};
     d.shapes_uploaded = data_.table.size();
   }
 
@@ -402,19 +410,20 @@ class OpenClExecutor final : public RayExecutor {
     d.timed.resize(kept);
   }
 
-  // `v` into `b` from element `offset` on; `b` holds them already.
-  template <class T>
-  void write_at(Device& d, GrowingBuffer& b, const std::vector<T>& v, size_t offset) {
+  // `v` (a vector or span) into `b` from element `offset` on; `b` holds
+  // them already. The host memory must stay as it is until the step ends.
+  template <class V>
+  void write_at(Device& d, GrowingBuffer& b, const V& v, size_t offset) {
     if (v.empty()) return;
-    d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, offset * sizeof(T), v.size() * sizeof(T), v.data(), nullptr,
-                               timed(d, false));
-    d.work.bytes_to_device += v.size() * sizeof(T);
+    const size_t bytes = v.size() * sizeof(v[0]);
+    d.queue.enqueueWriteBuffer(b.buffer, CL_FALSE, offset * sizeof(v[0]), bytes, v.data(), nullptr, timed(d, false));
+    d.work.bytes_to_device += bytes;
     ++d.work.writes;
   }
 
-  template <class T>
-  void write(Device& d, GrowingBuffer& b, const std::vector<T>& v) {
-    reserve(b, v.size() * sizeof(T));
+  template <class V>
+  void write(Device& d, GrowingBuffer& b, const V& v) {
+    reserve(b, v.size() * sizeof(v[0]));
     write_at(d, b, v, 0);
   }
 
@@ -453,6 +462,7 @@ class OpenClExecutor final : public RayExecutor {
       lane.batch_jobs.clear();
       lane.host_jobs.clear();
       lane.host_first_items.clear();
+      lane.host_frame_jobs.clear();
       lane.host_frames.clear();
       lane.host_near.clear();
       lane.host_tracked.clear();
@@ -507,7 +517,11 @@ class OpenClExecutor final : public RayExecutor {
     lane.batch_jobs.push_back(j);
     lane.host_jobs.push_back(dj);
     lane.host_first_items.push_back(lane.items);
-    lane.host_frames.push_back(make_frame(job));
+    if (runtime_->place_on_device) {
+      lane.host_frame_jobs.push_back({job.source_body, job.target_body, job.limits.distance_extension});
+    } else {
+      lane.host_frames.push_back(make_frame(job));
+    }
     lane.items += rtcd_uint(items);
     lane.load += items;
   }
@@ -534,7 +548,7 @@ class OpenClExecutor final : public RayExecutor {
       const rtcd_device_job& job = lane.host_jobs[l];
       const RaySources& rs = shapes_[job.source]->sources();
       const rtcd_uint* leaves = data_.source_leaves.data() + data_.table[job.source].first_source;
-      // Tracked rays, or every item of the near leaves (rtcd_list).
+      // Tracked rays, or every item of the near leaves (rtcd_prepare).
       const uint32_t count = job.params.iterative || job.item_count == 0 ? job.item_count : rs.item_count();
       for (uint32_t k = 0; k < count; ++k) {
         rtcd_candidate c{k, -1, -1, l, {}, {}};
@@ -697,14 +711,20 @@ class OpenClExecutor final : public RayExecutor {
     settle(d, lane, lane.first_items, lane.items);
   }
 
-  // Phase 1, on the device: a full batch's items listed; for the compacted
-  // layout, candidates placed, flagged, counted per job and laid out (the
-  // grid layout places them as it traces them).
+  // Phase 1, on the device: the jobs' frames made from the step's poses
+  // (uploaded once a step) and a full batch's items listed; for the
+  // compacted layout, candidates placed, flagged, counted per job and laid
+  // out (the grid layout places them as it traces them).
   void place_on_device(Device& d, Lane& lane) {
     const auto jobs_count = rtcd_uint(lane.host_jobs.size());
+    if (d.poses_written != step_) {
+      write(d, d.poses, poses_);
+      d.poses_written = step_;
+    }
     write(d, lane.jobs, lane.host_jobs);
     write(d, lane.first_items, lane.host_first_items);
-    write(d, lane.frames, lane.host_frames);
+    write(d, lane.frame_jobs, lane.host_frame_jobs);
+    reserve(lane.frames, jobs_count * sizeof(rtcd_frame));
     // Tracked rays that were not kept here come from the host's mirror,
     // after the kept ones the walks read.
     GrowingBuffer& tracked = d.kept[(step_ + 1) % 2];
@@ -713,17 +733,12 @@ class OpenClExecutor final : public RayExecutor {
     d.kept_used[(step_ + 1) % 2] = lane.upload_base + rtcd_uint(lane.host_tracked.size());
     reserve(lane.flags, lane.items);
     reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
-    if (!lane.host_jobs.front().params.iterative) {
-      write(d, lane.near, lane.host_near);
-      cl::Kernel& l = d.list;
-      l.setArg(0, lane.jobs.buffer);
-      l.setArg(1, jobs_count);
-      l.setArg(2, d.shapes[kTable]);
-      l.setArg(3, d.shapes[kSourceLeaves]);
-      l.setArg(4, lane.near.buffer);
-      l.setArg(5, lane.vertices.buffer);
-      launch(d, l, jobs_count);
-    }
+    reserve(lane.near, 1);  // unread by walks
+    if (!lane.host_jobs.front().params.iterative) write(d, lane.near, lane.host_near);
+    cl::Kernel& p = d.prepare;
+    set_args(p, 0, lane.jobs.buffer, jobs_count, d.shapes[kTable], d.shapes[kSourceLeaves], lane.near.buffer,
+             lane.vertices.buffer, lane.frame_jobs.buffer, d.poses.buffer, d.shapes[kBounds], lane.frames.buffer);
+    launch(d, p, jobs_count);
     if (grid(lane)) return;
     reserve(lane.staging, lane.items * sizeof(rtcd_candidate));
     cl::Kernel& s = d.select;
@@ -1007,6 +1022,7 @@ class OpenClExecutor final : public RayExecutor {
   Config config_;
   uint64_t batches_ = 0;  // batches with rays
   uint64_t step_ = 0;     // begin_step calls
+  std::span<const rtcd_pose> poses_;  // the step's (begin_step)
   bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback
   RayBatch* full_ = nullptr;  // the step's full batch, enqueued and not finished
   std::mutex recovering_;     // one waiter for a device's recovery reads

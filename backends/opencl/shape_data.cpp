@@ -1,6 +1,7 @@
 #include "shape_data.hpp"
 
 #include "bvh.hpp"
+#include "rtcd/step_pipeline.hpp"
 
 namespace rtcd::opencl {
 
@@ -56,6 +57,7 @@ void ShapeData::add(const Shape& shape, bool bvh) {
     d.kind = RTCD_TARGET_HALFSPACE;
   }
   table.push_back(d);
+  bounds.push_back(to_kernel(shape.bounds()));
 }
 
 }  // namespace rtcd::opencl

@@ -12,6 +12,7 @@ namespace rtcd::opencl {
 // The concatenated shape data every device holds.
 struct ShapeData {
   std::vector<rtcd_device_shape> table;
+  std::vector<rtcd_box> bounds;  // per shape, in double: the frames' candidate boxes
   std::vector<rtcd_vec3> positions, normals, origins, directions;
   std::vector<rtcd_uint> source_leaves;  // per origin: its leaf's node in the shape's source tree
   // Fold guards: ring_first rebased into the one ring list, with a

@@ -171,6 +171,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     idle("add_body");
     if (shape >= shapes_.size()) throw UsageError("add_body: unknown shape " + std::to_string(shape));
     bodies_.push_back({shape, checked(pose), true, {}, 0});
+    poses_.push_back(to_kernel(bodies_.back().pose));
     return BodyId(bodies_.size() - 1);
   }
 
@@ -192,6 +193,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   void set_pose(BodyId body, const Pose& pose) override {
     idle("set_pose");
     body_at(body).pose = checked(pose);
+    poses_[body] = to_kernel(body_at(body).pose);
   }
 
   using NarrowPhase::detect;
@@ -363,6 +365,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   bool derive_;  // some limit follows the scene: shapes are measured, motions tracked
   std::vector<ShapeEntry> shapes_;
   std::vector<Body> bodies_;
+  std::vector<rtcd_pose> poses_;  // bodies_'s poses as the frames take them (rtcd_relative_frame)
   // Pair states by key, ascending: each step merges them with the step's
   // sorted keys in one sequential pass (a hash map's scattered nodes cost
   // a cache miss per pair), into the other buffer of each pair.
@@ -416,7 +419,7 @@ void PipelineNarrowPhase::step(std::span<const BodyPair> pairs, StepResult& out)
   out.stats.reset();
   prepare(pairs, out);
   out.stats.seconds_prepare = lap();
-  executor_->begin_step();
+  executor_->begin_step(poses_);
   for (Batch b : {kTraced, kWalked}) batches_[b].counted = {};
   for (Batch b : {kTraced, kWalked}) {
     executor_->execute(batches_[b]);
@@ -619,15 +622,22 @@ std::span<const RayOutcome> PipelineNarrowPhase::walked(PairState& state, int d,
 }
 
 // Each direction from the two poses, not one from the other's inverse:
-// numbering the bodies the other way round then changes no bit.
+// numbering the bodies the other way round then changes no bit. The
+// kernel's function, which a device runs on the same poses for the same bits.
 void PipelineNarrowPhase::place(RayJob& job, BodyId source, BodyId target) const {
-  const Pose to_target = bodies_[target].pose.inverse() * bodies_[source].pose;
-  job.rotation = to_target.orientation.toRotationMatrix();
-  job.translation = to_target.position;
-  job.overlap = shapes_[job.target]
-                    .shape->bounds()
-                    .intersection(shapes_[job.source].shape->bounds().transformed(job.rotation, job.translation))
-                    .grown(job.limits.distance_extension);
+  job.source_body = source;
+  job.target_body = target;
+  const rtcd_box source_bounds = to_kernel(shapes_[job.source].shape->bounds());
+  const rtcd_box target_bounds = to_kernel(shapes_[job.target].shape->bounds());
+  rtcd_frame f;
+  rtcd_relative_frame(&poses_[source], &poses_[target], &source_bounds, &target_bounds,
+                      job.limits.distance_extension, &f);
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) job.rotation(i, k) = f.rotation[3 * i + k];
+    job.translation[i] = f.translation[i];
+    job.overlap.min[i] = f.lo[i];
+    job.overlap.max[i] = f.hi[i];
+  }
 }
 
 // The watched edges a walking pair held (Config::edge_retest_motion) rejoin

@@ -49,6 +49,7 @@ struct Residence {
 // One direction of one pair: the source's rays against the target.
 struct RayJob {
   ShapeId source = 0, target = 0;
+  BodyId source_body = 0, target_body = 0;  // whose poses make the frame (rtcd_relative_frame)
   // Source frame to target frame, in double: rays are cast in the target's
   // local frame, where its acceleration structure lives and where bodies far
   // from the world origin keep their relative precision.
@@ -119,6 +120,15 @@ struct RayBatch {
   }
 };
 
+// A pose and a box as kernel/frame.h takes them.
+inline rtcd_pose to_kernel(const Pose& pose) {
+  const Eigen::Quaterniond& q = pose.orientation;
+  return {{q.w(), q.x(), q.y(), q.z()}, {pose.position.x(), pose.position.y(), pose.position.z()}};
+}
+inline rtcd_box to_kernel(const Aabb& box) {
+  return {{box.min.x(), box.min.y(), box.min.z()}, {box.max.x(), box.max.y(), box.max.z()}};
+}
+
 class RayExecutor {
  public:
   virtual ~RayExecutor() = default;
@@ -128,8 +138,10 @@ class RayExecutor {
   // Called once per shape, in ShapeId order, before any job names it.
   virtual void add_shape(std::shared_ptr<const Shape> shape) = 0;
   // Called before each step's batches: a residence is good for the step
-  // after the one that wrote it.
-  virtual void begin_step() {}
+  // after the one that wrote it. `poses`: every body's pose by BodyId, the
+  // step's, for an executor that makes the jobs' frames where it runs them
+  // (rtcd_relative_frame, the bits of RayJob's); valid until the step ends.
+  virtual void begin_step(std::span<const rtcd_pose> /*poses*/) {}
   // Job j of the batch: its candidates, in order — every source item the overlap box takes
   // (rtcd_place_item: origins with a direction inside it, then edges that
   // meet it; full jobs, by item), or every tracked item it takes (iterative

@@ -4,6 +4,7 @@
 #ifndef RTCD_KERNEL_TRACER_H
 #define RTCD_KERNEL_TRACER_H
 
+#include "frame.h"
 #include "types.h"
 
 /* What a target is, for the executors' dispatch (a mesh, or a volume of volumes.h). */
@@ -116,14 +117,6 @@ RTCD_INLINE int rtcd_nearer(float best_d2, rtcd_int best, float d2, rtcd_int tri
 }
 
 #ifdef RTCD_HAS_DOUBLE
-/* The source-to-target transform and the candidate box, in double. */
-typedef struct {
-  double rotation[9]; /* row-major */
-  double translation[3];
-  double lo[3]; /* candidate box in the target frame */
-  double hi[3];
-} rtcd_frame;
-
 /* Places a source vertex's ray in the target's frame: the origin in double
  * (rotation, then translation), tested against the candidate box in double,
  * then rounded to float with its direction. 0: not a candidate (no
