@@ -304,6 +304,9 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
   const auto steps = run_scene("opencl:devices=1", {"concave", Mode::iterative, pairs, 6});
   expect_ran_on_devices(steps, 1);
   constexpr size_t kCounters = 8 * 24, kSummary = 20, kKept = 12, kReport = 36;
+  // Up: every body's pose, and a job's parameters, first item and bodies
+  // (its frame is made on the device); the walks' rays are there already.
+  constexpr size_t kPose = 56, kJob = 96 + 4 + 16;
   size_t walked = 0, reported = 0;
   for (size_t s = 2; s < steps.size(); ++s) {
     SCOPED_TRACE("step " + std::to_string(s));
@@ -319,6 +322,7 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
     EXPECT_EQ(st.bytes_from_device, kCounters + kSummary * 2 * pairs + kReport * report_read);
     // The walks' grid keeps each item's ray at its place: all read back apart.
     EXPECT_EQ(st.bytes_recovery, kKept * items);
+    EXPECT_EQ(st.bytes_to_device, kPose * 2 * pairs + kJob * 2 * pairs);
     EXPECT_EQ(st.device_waits, 1u);
     walked += items;
     reported += steps[s].contacts.size() + steps[s].predictive.size();
