@@ -5,6 +5,7 @@
 
 #include "rtcd/kernel/bvh.h"
 #include "rtcd/kernel/fold.h"
+#include "rtcd/kernel/job.h"
 #include "rtcd/kernel/tally.h"
 #include "rtcd/kernel/tracer.h"
 
@@ -24,9 +25,10 @@ typedef struct {
   rtcd_vec3 half_extents;   /* box */
 } rtcd_device_shape;
 
-/* One pair-direction of a batch on one device. Items are the job's
- * possible rays (every source vertex, or every tracked ray), numbered
- * across the batch; rays are the candidates among them, compacted. */
+/* One pair-direction of a batch on one device, made there from its setup
+ * (rtcd_job_setup, rtcd_prepare). Items are the job's possible rays (every
+ * source vertex, or every tracked ray), numbered across the batch; rays are
+ * the candidates among them, compacted. */
 typedef struct {
   rtcd_trace_params params;
   rtcd_uint source;
@@ -38,13 +40,20 @@ typedef struct {
 } rtcd_device_job;
 
 #ifdef RTCD_HAS_DOUBLE
-/* What makes a job's frame on the device (rtcd_prepare, rtcd_relative_frame):
- * its bodies, whose poses the step uploads, and its candidate box's growth. */
-typedef struct {
-  rtcd_uint source_body;
-  rtcd_uint target_body;
-  double extension;
-} rtcd_frame_job;
+/* The job a setup makes, with the shapes' traits and the configuration's switches. */
+RTCD_INLINE rtcd_device_job rtcd_device_job_of(rtcd_uint config, const rtcd_job_setup* s,
+                                               const rtcd_shape_traits* source, const rtcd_shape_traits* target,
+                                               const rtcd_box* target_bounds) {
+  rtcd_device_job job;
+  job.params = rtcd_make_params(config, s, source, target, target_bounds);
+  job.source = s->source;
+  job.target = s->target;
+  job.first_item = s->first_item;
+  job.item_count = s->item_count;
+  job.first_tracked = s->first_tracked;
+  job.first_near = s->first_near;
+  return job;
+}
 #endif
 
 /* Whether a full job's near-leaf bits hold source-tree node `leaf`. */

@@ -82,31 +82,38 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
 }
 
 #ifdef RTCD_HAS_DOUBLE
-/* One job, before its items: its frame from its bodies' poses, as the
- * host's place makes it (rtcd_relative_frame); for a full job, the source
- * items (origins, then edges) of its near leaves, in item order, listed as
- * its items (the host counted them). */
-__kernel void rtcd_prepare(__global const rtcd_device_job* jobs, rtcd_uint job_count,
-                           __global const rtcd_device_shape* shapes, __global const rtcd_uint* source_leaves,
-                           __global const rtcd_uint* near_bits, __global rtcd_uint* vertices,
-                           __global const rtcd_frame_job* frame_jobs, __global const rtcd_pose* poses,
-                           __global const rtcd_box* bounds, __global rtcd_frame* frames) {
+/* One job, before its items, made from its setup as the host makes it: its
+ * parameters (rtcd_make_params), its first item, and its frame from its
+ * bodies' poses (rtcd_relative_frame); for a full job, the source items
+ * (origins, then edges) of its near leaves, in item order, listed as its
+ * items (the host counted them). */
+__kernel void rtcd_prepare(__global const rtcd_job_setup* setups, rtcd_uint job_count, rtcd_uint config,
+                           __global const rtcd_device_shape* shapes, __global const rtcd_shape_traits* traits,
+                           __global const rtcd_box* bounds, __global const rtcd_uint* source_leaves,
+                           __global const rtcd_uint* near_bits, __global const rtcd_pose* poses,
+                           __global rtcd_device_job* jobs, __global rtcd_uint* first_items,
+                           __global rtcd_frame* frames, __global rtcd_uint* vertices) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint v, n, count;
+  rtcd_job_setup s;
   rtcd_device_job job;
-  rtcd_frame_job fj;
+  rtcd_shape_traits source_traits, target_traits;
   rtcd_pose source, target;
   rtcd_box source_bounds, target_bounds;
   rtcd_frame frame;
   __global const rtcd_uint* leaves;
   if (j >= job_count) return;
-  job = jobs[j];
-  fj = frame_jobs[j];
-  source = poses[fj.source_body];
-  target = poses[fj.target_body];
-  source_bounds = bounds[job.source];
-  target_bounds = bounds[job.target];
-  rtcd_relative_frame(&source, &target, &source_bounds, &target_bounds, fj.extension, &frame);
+  s = setups[j];
+  source_traits = traits[s.source];
+  target_traits = traits[s.target];
+  source_bounds = bounds[s.source];
+  target_bounds = bounds[s.target];
+  job = rtcd_device_job_of(config, &s, &source_traits, &target_traits, &target_bounds);
+  jobs[j] = job;
+  first_items[j] = s.first_item;
+  source = poses[s.source_body];
+  target = poses[s.target_body];
+  rtcd_relative_frame(&source, &target, &source_bounds, &target_bounds, s.extension, &frame);
   frames[j] = frame;
   if (job.params.iterative || job.item_count == 0) return;
   leaves = source_leaves + shapes[job.source].first_source;

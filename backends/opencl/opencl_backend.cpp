@@ -4,8 +4,9 @@
 // the device holding its tracked rays; the others go to the least loaded
 // by expected rays), each device with its own queue, and all devices run
 // at once:
-//   1. rtcd_prepare: each job's frame made from its bodies' poses by the
-//      host's own function (kernel/frame.h), then rtcd_select: every
+//   1. rtcd_prepare: each job made from its 64-byte setup (parameters,
+//      first item) and its frame from its bodies' poses, by the host's own
+//      functions (kernel/job.h, kernel/frame.h), then rtcd_select: every
 //      possible ray (source item: a vertex or an edge, or tracked ray)
 //      placed in the target's frame in double and flagged when it is a
 //      candidate (the host makes the frames and places the rays when a
@@ -25,7 +26,7 @@
 //      guessed from the last batch; past it, a second read and wait), and
 //      builds each job's kept outcomes in its slot: the reports in their
 //      places, placeholders (kind and edge) for the rest, so the step is in
-//      job order (poses and jobs go up; no other outcome comes down).
+//      job order (poses and setups go up; no other outcome comes down).
 //   5. The kept rays' walk starts are read back on a second queue that
 //      nothing waits for (bytes_recovery), unless the host reorders a
 //      pair's rays (recover) or the CPU takes a step over from a fault.
@@ -60,6 +61,8 @@ static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && size
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 36 && sizeof(rtcd_job_summary) == 20 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
+static_assert(sizeof(rtcd_job_setup) == 64 && alignof(rtcd_job_setup) == 8 && sizeof(rtcd_pose) == 56 &&
+              sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
 
 constexpr size_t kGroupSize = 64;
 // A kept outcome's vertex until its walk start is recovered.
@@ -75,7 +78,7 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
-  kPrimitives, kOrigins, kDirections, kSourceLeaves, kBounds
+  kPrimitives, kOrigins, kDirections, kSourceLeaves, kBounds, kTraits
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -83,14 +86,14 @@ constexpr size_t kTracedShapeBuffers = kOrigins;
 // buffers they use. A step's two batches have a lane each, so the full
 // batch runs on the device while the walks are set up.
 struct Lane {
-  GrowingBuffer jobs, first_items, frame_jobs, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
+  GrowingBuffer setups, jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
   GrowingBuffer tallies, first_reports, summaries, total, reports;
   // The jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
   std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
-  std::vector<rtcd_frame_job> host_frame_jobs;  // the device makes the frames (rtcd_prepare)
-  std::vector<rtcd_frame> host_frames;          // the host places the rays: it makes them
+  std::vector<rtcd_job_setup> host_setups;  // the device makes the jobs and frames from them (rtcd_prepare)
+  std::vector<rtcd_frame> host_frames;      // the host places the rays: it makes the frames
   std::vector<rtcd_uint> host_near;  // full jobs' near-leaf bits, by source-tree node
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
@@ -360,7 +363,7 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
                 upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves),
-                upload_once(data_.bounds)};
+                upload_once(data_.bounds),     upload_once(data_.traits)};
     d.shapes_uploaded = data_.table.size();
   }
 
@@ -462,7 +465,7 @@ class OpenClExecutor final : public RayExecutor {
       lane.batch_jobs.clear();
       lane.host_jobs.clear();
       lane.host_first_items.clear();
-      lane.host_frame_jobs.clear();
+      lane.host_setups.clear();
       lane.host_frames.clear();
       lane.host_near.clear();
       lane.host_tracked.clear();
@@ -518,7 +521,11 @@ class OpenClExecutor final : public RayExecutor {
     lane.host_jobs.push_back(dj);
     lane.host_first_items.push_back(lane.items);
     if (runtime_->place_on_device) {
-      lane.host_frame_jobs.push_back({job.source_body, job.target_body, job.limits.distance_extension});
+      rtcd_job_setup& setup = lane.host_setups.emplace_back(job_setup(job, config));
+      setup.first_item = dj.first_item;
+      setup.item_count = dj.item_count;
+      setup.first_tracked = dj.first_tracked;
+      setup.first_near = dj.first_near;
     } else {
       lane.host_frames.push_back(make_frame(job));
     }
@@ -721,9 +728,9 @@ class OpenClExecutor final : public RayExecutor {
       write(d, d.poses, poses_);
       d.poses_written = step_;
     }
-    write(d, lane.jobs, lane.host_jobs);
-    write(d, lane.first_items, lane.host_first_items);
-    write(d, lane.frame_jobs, lane.host_frame_jobs);
+    write(d, lane.setups, lane.host_setups);
+    reserve(lane.jobs, jobs_count * sizeof(rtcd_device_job));
+    reserve(lane.first_items, jobs_count * sizeof(rtcd_uint));
     reserve(lane.frames, jobs_count * sizeof(rtcd_frame));
     // Tracked rays that were not kept here come from the host's mirror,
     // after the kept ones the walks read.
@@ -736,8 +743,9 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.near, 1);  // unread by walks
     if (!lane.host_jobs.front().params.iterative) write(d, lane.near, lane.host_near);
     cl::Kernel& p = d.prepare;
-    set_args(p, 0, lane.jobs.buffer, jobs_count, d.shapes[kTable], d.shapes[kSourceLeaves], lane.near.buffer,
-             lane.vertices.buffer, lane.frame_jobs.buffer, d.poses.buffer, d.shapes[kBounds], lane.frames.buffer);
+    set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), d.shapes[kTable], d.shapes[kTraits],
+             d.shapes[kBounds], d.shapes[kSourceLeaves], lane.near.buffer, d.poses.buffer, lane.jobs.buffer,
+             lane.first_items.buffer, lane.frames.buffer, lane.vertices.buffer);
     launch(d, p, jobs_count);
     if (grid(lane)) return;
     reserve(lane.staging, lane.items * sizeof(rtcd_candidate));

@@ -1,7 +1,7 @@
 #include "shape_data.hpp"
 
 #include "bvh.hpp"
-#include "rtcd/step_pipeline.hpp"
+#include "rtcd/cpu_executor.hpp"
 
 namespace rtcd::opencl {
 
@@ -58,6 +58,7 @@ void ShapeData::add(const Shape& shape, bool bvh) {
   }
   table.push_back(d);
   bounds.push_back(to_kernel(shape.bounds()));
+  traits.push_back(shape_traits(shape));
 }
 
 }  // namespace rtcd::opencl

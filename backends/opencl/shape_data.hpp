@@ -13,6 +13,7 @@ namespace rtcd::opencl {
 struct ShapeData {
   std::vector<rtcd_device_shape> table;
   std::vector<rtcd_box> bounds;  // per shape, in double: the frames' candidate boxes
+  std::vector<rtcd_shape_traits> traits;  // per shape: what its jobs' parameters read
   std::vector<rtcd_vec3> positions, normals, origins, directions;
   std::vector<rtcd_uint> source_leaves;  // per origin: its leaf's node in the shape's source tree
   // Fold guards: ring_first rebased into the one ring list, with a

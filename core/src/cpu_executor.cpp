@@ -78,17 +78,6 @@ static_assert(sizeof(Mesh::FoldGuard::Face) == sizeof(rtcd_fold_face));
 
 rtcd_vec3 to_kernel(const Eigen::Vector3f& v) { return rtcd_v3(v.x(), v.y(), v.z()); }
 
-// The least float >= x and the greatest float <= x: a float lies in a
-// double interval exactly when it lies between these bounds of its ends.
-float float_at_least(double x) {
-  const float f = float(x);
-  return double(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
-}
-float float_at_most(double x) {
-  const float f = float(x);
-  return double(f) > x ? std::nextafter(f, -std::numeric_limits<float>::infinity()) : f;
-}
-
 // Most rays per parallel chunk; the least items (tracked rays to walk, or
 // source vertices to select from) worth spreading jobs over threads; the
 // least traced rays worth it (a traced ray costs tens of walks).
@@ -273,33 +262,45 @@ std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory
   return std::make_unique<CpuExecutor>(std::move(tracers));
 }
 
+rtcd_shape_traits shape_traits(const Shape& shape) {
+  rtcd_shape_traits t;
+  const Mesh* mesh = shape.mesh();
+  t.kind = mesh                                             ? RTCD_TARGET_MESH
+           : std::holds_alternative<Sphere>(shape.geometry()) ? RTCD_TARGET_SPHERE
+           : std::holds_alternative<Box>(shape.geometry())    ? RTCD_TARGET_BOX
+                                                              : RTCD_TARGET_HALFSPACE;
+  t.convex = mesh && mesh->convex();
+  t.first_edge = shape.sources().first_edge();
+  t.sphere_radius = shape.sources().sphere_radius;
+  return t;
+}
+
+rtcd_uint config_flags(const Config& config) {
+  return (config.predictive ? RTCD_CONFIG_PREDICTIVE : 0u) |
+         (config.predictive && config.mode != Mode::full ? RTCD_CONFIG_WATCH : 0u) |
+         (config.verify_walks ? RTCD_CONFIG_VERIFY : 0u) | (config.edge_contacts ? RTCD_CONFIG_EDGES : 0u) |
+         (config.nearest_surface ? RTCD_CONFIG_NEAREST : 0u);
+}
+
+rtcd_job_setup job_setup(const RayJob& job, const Config& config) {
+  rtcd_job_setup s{};
+  s.extension = job.limits.distance_extension;
+  s.reach = job.limits.watch_reach(config.mode);
+  s.moved = job.moved;
+  s.source_body = job.source_body;
+  s.target_body = job.target_body;
+  s.source = job.source;
+  s.target = job.target;
+  s.max_walk_steps = job.limits.max_walk_steps;
+  s.flags = (job.iterative ? RTCD_JOB_ITERATIVE : 0u) | (job.edges ? RTCD_JOB_EDGES : 0u);
+  return s;
+}
+
 rtcd_trace_params make_trace_params(const RayJob& job, const Shape& source, const Shape& target, const Config& config) {
-  // Watching serves only later walks, which full mode never makes; it
-  // belongs to the predictive logic and is off with it.
-  const bool watch = config.predictive && config.mode != Mode::full;
-  const double reach = job.limits.watch_reach(config.mode);
-  const Aabb grown = target.bounds().grown(reach);
-  rtcd_trace_params p;
-  p.watch_lo = rtcd_v3(float_at_least(grown.min.x()), float_at_least(grown.min.y()), float_at_least(grown.min.z()));
-  p.watch_hi = rtcd_v3(float_at_most(grown.max.x()), float_at_most(grown.max.y()), float_at_most(grown.max.z()));
-  p.extension = float(job.limits.distance_extension);
-  p.reach = float(reach);
-  p.max_walk_steps = job.limits.max_walk_steps;
-  p.predictive = config.predictive;
-  p.watch = watch;
-  // A convex target cannot fold between a ray's entry and exit faces.
-  p.verify = config.verify_walks && !(target.mesh() && target.mesh()->convex());
-  p.iterative = job.iterative;
-  p.moved = float_at_least(job.moved);
-  p.first_edge = source.sources().first_edge();
-  p.source_radius = source.sources().sphere_radius;
-  // A half-space needs no edge test: a body crossing its plane has an
-  // origin below it. A sphere has no edges: its deepest point is tested
-  // against spheres and boxes only.
-  p.edges = job.edges && config.edge_contacts && !std::holds_alternative<HalfSpace>(target.geometry()) &&
-            !(p.source_radius > 0.0f && target.mesh());
-  p.nearest_surface = config.nearest_surface && target.mesh() != nullptr;
-  return p;
+  const rtcd_job_setup setup = job_setup(job, config);
+  const rtcd_shape_traits source_traits = shape_traits(source), target_traits = shape_traits(target);
+  const rtcd_box target_bounds = to_kernel(target.bounds());
+  return rtcd_make_params(config_flags(config), &setup, &source_traits, &target_traits, &target_bounds);
 }
 
 rtcd_frame make_frame(const RayJob& job) {

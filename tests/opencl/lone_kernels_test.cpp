@@ -8,9 +8,10 @@
 // a share's bounds or its prefix would slip. The replays reach a few of
 // these counts only by chance.
 //
-// The frames: rtcd_prepare makes each job's frame from its bodies' poses
-// by the function the pipeline's place runs on the host; the two must be
-// the same bits, or a device would place rays the CPU does not.
+// The jobs: rtcd_prepare makes each job's parameters from its setup and its
+// frame from its bodies' poses by the functions the host runs (the CPU
+// executor's make_trace_params, the pipeline's place); the two must be the
+// same bits, or a device would place and trace rays the CPU does not.
 #include <gtest/gtest.h>
 
 #include <cstring>
@@ -129,14 +130,16 @@ TEST(OpenClScans, TotalsAreTheHostsSumsAroundGroupMultiples) {
   }
 }
 
-// Random poses far from the origin and random boxes: the frames
-// rtcd_prepare makes are the host's rtcd_relative_frame bit for bit, and
-// that is the transform target⁻¹ ∘ source (Eigen's, to rounding).
-TEST(OpenClFrames, PrepareMakesTheHostsFramesBitForBit) {
+// Random setups, shapes, poses far from the origin and configurations: the
+// jobs, first items and frames rtcd_prepare makes are those the host's
+// rtcd_make_params and rtcd_relative_frame make, bit for bit, and the frame
+// is the transform target⁻¹ ∘ source (Eigen's, to rounding).
+TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   const auto rt = runtime();
   if (!rt->place_on_device) GTEST_FAIL() << "the device lacks fp64: the host makes the frames there";
   std::mt19937 g(13);
   std::uniform_real_distribution<double> unit(-1.0, 1.0), far(-1e4, 1e4), size(0.01, 3.0);
+  std::uniform_int_distribution<rtcd_uint> word(0, 1000), bit(0, 1);
   constexpr size_t kBodies = 300, kShapes = 7, kJobs = 1000;
   std::vector<rtcd_pose> poses(kBodies);
   std::vector<Eigen::Quaterniond> orientations(kBodies);
@@ -146,65 +149,89 @@ TEST(OpenClFrames, PrepareMakesTheHostsFramesBitForBit) {
     poses[b] = {{q.w(), q.x(), q.y(), q.z()}, {far(g), far(g), far(g)}};
   }
   std::vector<rtcd_box> bounds(kShapes);
-  for (rtcd_box& box : bounds)
-    for (int i = 0; i < 3; ++i) {
-      box.lo[i] = unit(g) - size(g);
-      box.hi[i] = box.lo[i] + 2 * size(g);
+  std::vector<rtcd_shape_traits> traits(kShapes);
+  for (size_t i = 0; i < kShapes; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      bounds[i].lo[k] = unit(g) - size(g);
+      bounds[i].hi[k] = bounds[i].lo[k] + 2 * size(g);
     }
-  std::vector<rtcd_device_job> jobs(kJobs);
-  std::vector<rtcd_frame_job> frame_jobs(kJobs);
+    const rtcd_int kind = rtcd_int(i % 4);  // mesh, sphere, box, half-space
+    traits[i] = {kind, rtcd_int(bit(g)), word(g), kind == RTCD_TARGET_SPHERE ? float(size(g)) : 0.0f};
+  }
+  std::vector<rtcd_job_setup> setups(kJobs);
   std::uniform_int_distribution<rtcd_uint> body(0, kBodies - 1), shape(0, kShapes - 1);
   for (size_t j = 0; j < kJobs; ++j) {
-    jobs[j] = rtcd_device_job{};
-    jobs[j].params.iterative = 1;  // nothing to list: the frame alone
-    jobs[j].source = shape(g);
-    jobs[j].target = shape(g);
+    rtcd_job_setup& s = setups[j];
+    s.extension = size(g) / 10;
+    s.reach = size(g) / 20;
+    s.moved = size(g) / 30;
+    s.source_body = body(g);
+    s.target_body = body(g);
     // Neighbours a few units apart (the candidate box not empty), and any two.
-    const rtcd_uint source = body(g);
-    rtcd_uint target = body(g);
     if (j % 2 == 0) {
-      target = (source + 1) % kBodies;
-      for (int i = 0; i < 3; ++i) poses[target].position[i] = poses[source].position[i] + unit(g);
+      s.target_body = (s.source_body + 1) % kBodies;
+      for (int k = 0; k < 3; ++k) poses[s.target_body].position[k] = poses[s.source_body].position[k] + unit(g);
     }
-    frame_jobs[j] = {source, target, size(g) / 10};
+    s.source = shape(g);
+    s.target = shape(g);
+    s.max_walk_steps = word(g);
+    s.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_JOB_EDGES : 0u);  // nothing to list: jobs and frames alone
+    s.first_item = rtcd_uint(j) * 3;
+    s.item_count = word(g);
+    s.first_tracked = word(g);
+    s.first_near = word(g);
   }
   std::vector<rtcd_device_shape> table(kShapes);
-  std::vector<rtcd_uint> unused(1);
+  std::vector<rtcd_uint> unused(1), first_items(kJobs);
+  std::vector<rtcd_device_job> jobs(kJobs);
   std::vector<rtcd_frame> frames(kJobs);
+  // Buffers outlive the kernel's use: setting an argument does not retain one.
+  const cl::Buffer setups_buffer = buffer_of(*rt, setups), jobs_buffer = buffer_of(*rt, jobs),
+                   firsts_buffer = buffer_of(*rt, first_items), frames_buffer = buffer_of(*rt, frames);
   cl::Kernel k(rt->program, "rtcd_prepare");
-  const cl::Buffer frames_buffer = buffer_of(*rt, frames);
-  const cl::Buffer args[] = {buffer_of(*rt, jobs),       buffer_of(*rt, table),  buffer_of(*rt, unused),
-                             buffer_of(*rt, unused),     buffer_of(*rt, unused), buffer_of(*rt, frame_jobs),
-                             buffer_of(*rt, poses),      buffer_of(*rt, bounds), frames_buffer};
-  k.setArg(0, args[0]);
-  k.setArg(1, rtcd_uint(kJobs));
-  for (cl_uint i = 1; i < 9; ++i) k.setArg(i + 1, args[i]);
   cl::CommandQueue queue(rt->context, rt->devices.front());
-  queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((kJobs + kGroupSize - 1) / kGroupSize * kGroupSize),
-                             cl::NDRange(kGroupSize));
-  queue.finish();
-  read_back(*rt, frames_buffer, frames);
   size_t boxes = 0;
-  for (size_t j = 0; j < kJobs; ++j) {
-    const rtcd_frame_job& fj = frame_jobs[j];
-    rtcd_frame host;
-    rtcd_relative_frame(&poses[fj.source_body], &poses[fj.target_body], &bounds[jobs[j].source],
-                        &bounds[jobs[j].target], fj.extension, &host);
-    ASSERT_EQ(std::memcmp(&host, &frames[j], sizeof(rtcd_frame)), 0) << "job " << j << ": the device's frame differs";
-    boxes += host.lo[0] <= host.hi[0] && host.lo[1] <= host.hi[1] && host.lo[2] <= host.hi[2];
-    // The transform itself, against Eigen's.
-    const rtcd_pose &s = poses[fj.source_body], &t = poses[fj.target_body];
-    const Eigen::Quaterniond to_target = orientations[fj.target_body].conjugate() * orientations[fj.source_body];
-    const Eigen::Matrix3d rotation = to_target.toRotationMatrix();
-    const Eigen::Vector3d translation =
-        orientations[fj.target_body].conjugate() * (Eigen::Vector3d(s.position[0], s.position[1], s.position[2]) -
-                                                    Eigen::Vector3d(t.position[0], t.position[1], t.position[2]));
-    for (int i = 0; i < 3; ++i) {
-      ASSERT_NEAR(host.translation[i], translation[i], 1e-9 * (1 + translation.norm())) << "job " << j;
-      for (int c = 0; c < 3; ++c) ASSERT_NEAR(host.rotation[3 * i + c], rotation(i, c), 1e-14) << "job " << j;
+  for (const rtcd_uint config : {0u, 31u, RTCD_CONFIG_PREDICTIVE | RTCD_CONFIG_EDGES, RTCD_CONFIG_VERIFY}) {
+    SCOPED_TRACE("configuration " + std::to_string(config));
+    k.setArg(0, setups_buffer);
+    k.setArg(1, rtcd_uint(kJobs));
+    k.setArg(2, config);
+    const cl::Buffer args[] = {buffer_of(*rt, table),  buffer_of(*rt, traits), buffer_of(*rt, bounds),
+                               buffer_of(*rt, unused), buffer_of(*rt, unused), buffer_of(*rt, poses),
+                               jobs_buffer,            firsts_buffer,          frames_buffer,
+                               buffer_of(*rt, unused)};
+    for (cl_uint i = 0; i < 10; ++i) k.setArg(i + 3, args[i]);
+    queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((kJobs + kGroupSize - 1) / kGroupSize * kGroupSize),
+                               cl::NDRange(kGroupSize));
+    queue.finish();
+    read_back(*rt, jobs_buffer, jobs);
+    read_back(*rt, firsts_buffer, first_items);
+    read_back(*rt, frames_buffer, frames);
+    for (size_t j = 0; j < kJobs; ++j) {
+      const rtcd_job_setup& s = setups[j];
+      const rtcd_device_job job =
+          rtcd_device_job_of(config, &s, &traits[s.source], &traits[s.target], &bounds[s.target]);
+      ASSERT_EQ(std::memcmp(&job, &jobs[j], sizeof(job)), 0) << "job " << j << ": the device's job differs";
+      ASSERT_EQ(first_items[j], s.first_item) << "job " << j;
+      rtcd_frame host;
+      rtcd_relative_frame(&poses[s.source_body], &poses[s.target_body], &bounds[s.source], &bounds[s.target],
+                          s.extension, &host);
+      ASSERT_EQ(std::memcmp(&host, &frames[j], sizeof(rtcd_frame)), 0) << "job " << j << ": the device's frame differs";
+      boxes += host.lo[0] <= host.hi[0] && host.lo[1] <= host.hi[1] && host.lo[2] <= host.hi[2];
+      // The transform itself, against Eigen's.
+      const rtcd_pose &from = poses[s.source_body], &to = poses[s.target_body];
+      const Eigen::Quaterniond inverse = orientations[s.target_body].conjugate();
+      const Eigen::Matrix3d rotation = (inverse * orientations[s.source_body]).toRotationMatrix();
+      const Eigen::Vector3d translation =
+          inverse * (Eigen::Vector3d(from.position[0], from.position[1], from.position[2]) -
+                     Eigen::Vector3d(to.position[0], to.position[1], to.position[2]));
+      for (int i = 0; i < 3; ++i) {
+        ASSERT_NEAR(host.translation[i], translation[i], 1e-9 * (1 + translation.norm())) << "job " << j;
+        for (int c = 0; c < 3; ++c) ASSERT_NEAR(host.rotation[3 * i + c], rotation(i, c), 1e-14) << "job " << j;
+      }
     }
   }
-  EXPECT_GT(boxes, kJobs / 10) << "the neighbours' candidate boxes must be boxes, or the test says little";
+  EXPECT_GT(boxes, 4 * kJobs / 10) << "the neighbours' candidate boxes must be boxes, or the test says little";
 }
 
 }  // namespace

@@ -6,6 +6,7 @@
 
 #include <memory>
 
+#include "rtcd/kernel/job.h"
 #include "rtcd/kernel/locate.h"
 #include "rtcd/kernel/tracer.h"
 #include "rtcd/distance_bound.hpp"
@@ -42,10 +43,14 @@ class MeshTracerFactory {
 std::unique_ptr<RayExecutor> make_cpu_executor(std::unique_ptr<MeshTracerFactory> tracers);
 
 // What every executor derives from a job the same way, for the per-ray code
-// of kernel/trace.h: the per-ray parameters, the transform and candidate box
-// for rtcd_place_ray.
+// of kernel/trace.h: the per-ray parameters (rtcd_make_params, from the
+// job's setup, the shapes' traits and the configuration's switches, which a
+// device is sent instead), the transform and candidate box for rtcd_place_ray.
 rtcd_trace_params make_trace_params(const RayJob& job, const Shape& source, const Shape& target, const Config& config);
 rtcd_frame make_frame(const RayJob& job);
+rtcd_job_setup job_setup(const RayJob& job, const Config& config);  // its items' fields left 0
+rtcd_shape_traits shape_traits(const Shape& shape);
+rtcd_uint config_flags(const Config& config);
 
 // How far from the target's surface a full job's edges are still worth
 // testing: those that cannot cross it now are dropped, and of the others

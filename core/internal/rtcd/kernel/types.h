@@ -1,7 +1,7 @@
 /* Plain types and vector helpers for the per-ray kernel code.
  * This header and its siblings are written in the subset of C that is valid
  * C++ and valid OpenCL C 1.2, so the CPU backends and the device compile the
- * same text. Only sqrt, fabs, ilogb and ldexp are used from the math library. Compile
+ * same text. Only sqrt, fabs, ilogb, ldexp and nextafter are used from the math library. Compile
  * without floating-point contraction on both sides (-ffp-contract=off; the
  * pragma below for OpenCL) so both agree bit for bit on walk decisions. */
 #ifndef RTCD_KERNEL_TYPES_H
@@ -16,6 +16,7 @@
 #define RTCD_FABS(x) fabs(x)
 #define RTCD_ILOGB(x) ilogb(x)
 #define RTCD_LDEXP(x, e) ldexp(x, e)
+#define RTCD_NEXTAFTER(x, y) nextafter(x, y)
 typedef uint rtcd_uint;
 typedef int rtcd_int;
 typedef uchar rtcd_uchar;
@@ -36,6 +37,7 @@ typedef ulong rtcd_ulong;
 #define RTCD_FABS(x) fabsf(x)
 #define RTCD_ILOGB(x) ilogbf(x)
 #define RTCD_LDEXP(x, e) ldexpf(x, e)
+#define RTCD_NEXTAFTER(x, y) nextafterf(x, y)
 typedef uint32_t rtcd_uint;
 typedef int32_t rtcd_int;
 typedef uint8_t rtcd_uchar;

@@ -1,0 +1,93 @@
+/* A job's setup: what the host decides for one pair-direction (its bodies
+ * and shapes, limits, motion, mode, whether it tests edges) and the one
+ * function that makes its per-ray parameters from it, run by the CPU
+ * executor and by a device (the OpenCL executor's rtcd_prepare) alike, so
+ * a device is sent the setup and makes the same bits. */
+#ifndef RTCD_KERNEL_JOB_H
+#define RTCD_KERNEL_JOB_H
+
+#include "tracer.h"
+
+/* rtcd_job_setup::flags */
+#define RTCD_JOB_ITERATIVE 1u /* walks last step's rays */
+#define RTCD_JOB_EDGES 2u     /* this direction tests its source's edges */
+
+/* The configuration's switches a job's parameters read, as one word. */
+#define RTCD_CONFIG_PREDICTIVE 1u /* Config::predictive */
+#define RTCD_CONFIG_WATCH 2u      /* predictive rays on and not Mode::full: vertices near the target are watched */
+#define RTCD_CONFIG_VERIFY 4u     /* Config::verify_walks */
+#define RTCD_CONFIG_EDGES 8u      /* Config::edge_contacts */
+#define RTCD_CONFIG_NEAREST 16u   /* Config::nearest_surface */
+
+/* What a shape brings to the parameters of the jobs it is in. */
+typedef struct {
+  rtcd_int kind;        /* RTCD_TARGET_* */
+  rtcd_int convex;      /* a convex mesh: a walk cannot fold in it */
+  rtcd_uint first_edge; /* its items from here on are edges */
+  float sphere_radius;  /* a sphere: its radius; 0 otherwise */
+} rtcd_shape_traits;
+
+/* The least float >= x and the greatest float <= x: a float lies in a
+ * double interval exactly when it lies between these bounds of its ends. */
+RTCD_INLINE float rtcd_float_at_least(double x) {
+  float f = (float)x;
+  return (double)f < x ? RTCD_NEXTAFTER(f, INFINITY) : f;
+}
+RTCD_INLINE float rtcd_float_at_most(double x) {
+  float f = (float)x;
+  return (double)f > x ? RTCD_NEXTAFTER(f, -INFINITY) : f;
+}
+
+#ifdef RTCD_HAS_DOUBLE
+/* One pair-direction as the host decided it. 64 bytes. */
+typedef struct {
+  double extension; /* PairLimits::distance_extension */
+  double reach;     /* PairLimits::watch_reach: how far from the target a vertex is watched */
+  double moved;     /* iterative jobs: the pair's motion since its full step (equation 2.1) */
+  rtcd_uint source_body;
+  rtcd_uint target_body;
+  rtcd_uint source; /* shapes */
+  rtcd_uint target;
+  rtcd_uint max_walk_steps;
+  rtcd_uint flags; /* RTCD_JOB_* */
+  rtcd_uint first_item;
+  rtcd_uint item_count;
+  rtcd_uint first_tracked; /* iterative jobs: where its tracked rays are */
+  rtcd_uint first_near;    /* full jobs: its words of near-leaf bits */
+} rtcd_job_setup;
+
+/* The job's per-ray parameters. Watching serves only later walks, which
+ * full mode never makes; it belongs to the predictive logic and is off
+ * with it. A convex target cannot fold between a ray's entry and exit
+ * faces. A half-space needs no edge test: a body crossing its plane has an
+ * origin below it. A sphere has no edges: its deepest point is tested
+ * against spheres and boxes only. */
+RTCD_INLINE rtcd_trace_params rtcd_make_params(rtcd_uint config, const rtcd_job_setup* s,
+                                               const rtcd_shape_traits* source, const rtcd_shape_traits* target,
+                                               const rtcd_box* target_bounds) {
+  rtcd_trace_params p;
+  int mesh = target->kind == RTCD_TARGET_MESH;
+  p.watch_lo = rtcd_v3(rtcd_float_at_least(target_bounds->lo[0] - s->reach),
+                       rtcd_float_at_least(target_bounds->lo[1] - s->reach),
+                       rtcd_float_at_least(target_bounds->lo[2] - s->reach));
+  p.watch_hi = rtcd_v3(rtcd_float_at_most(target_bounds->hi[0] + s->reach),
+                       rtcd_float_at_most(target_bounds->hi[1] + s->reach),
+                       rtcd_float_at_most(target_bounds->hi[2] + s->reach));
+  p.extension = (float)s->extension;
+  p.reach = (float)s->reach;
+  p.max_walk_steps = s->max_walk_steps;
+  p.predictive = (config & RTCD_CONFIG_PREDICTIVE) != 0;
+  p.watch = (config & RTCD_CONFIG_WATCH) != 0;
+  p.verify = (config & RTCD_CONFIG_VERIFY) != 0 && !(mesh && target->convex);
+  p.iterative = (s->flags & RTCD_JOB_ITERATIVE) != 0;
+  p.moved = rtcd_float_at_least(s->moved);
+  p.first_edge = source->first_edge;
+  p.source_radius = source->sphere_radius;
+  p.edges = (s->flags & RTCD_JOB_EDGES) != 0 && (config & RTCD_CONFIG_EDGES) != 0 &&
+            target->kind != RTCD_TARGET_HALFSPACE && !(p.source_radius > 0.0f && mesh);
+  p.nearest_surface = (config & RTCD_CONFIG_NEAREST) != 0 && mesh;
+  return p;
+}
+#endif
+
+#endif
