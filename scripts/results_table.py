@@ -430,9 +430,9 @@ def pocl_avalanche_rows():
     """Phase C of the avalanche replays on PoCL: detect against Embree (and
     the peers, where the file replayed them), and the bytes a step each way,
     from a file whose header names its date, commit and machine."""
-    source = "opencl/device_frames.txt"
+    source = "opencl/device_jobs.txt"
     where = f"{RESULTS}/{source}"
-    text = read_text("opencl", "device_frames.txt")
+    text = read_text("opencl", "device_jobs.txt")
     stamp = {}
     for key in ("date", "commit", "machine"):
         found = re.search(rf"^# {key}: (.+)$", text, re.M)
