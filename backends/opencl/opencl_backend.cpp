@@ -23,7 +23,8 @@
 //      are counted there (kernel/tally.h), and those that report (contacts,
 //      predictive rays) are laid out by job. After one wait the host reads
 //      the counters, a summary a job and the reports whole (up to a bound
-//      guessed from the last batch; past it, a second read and wait), and
+//      guessed from each pair's reports the step before; past it, a second
+//      read and wait), and
 //      builds each job's kept outcomes in its slot: the reports in their
 //      places, placeholders (kind and edge) for the rest, so the step is in
 //      job order (poses and setups go up; no other outcome comes down).
@@ -105,9 +106,12 @@ struct Lane {
   std::vector<rtcd_report> host_reports;
   std::vector<rtcd_tracked> host_kept;  // the host placed the rays: it reads them whole
   uint32_t items = 0, ray_count = 0, report_count = 0;
-  uint32_t last_reports = 0;  // report_count the step before (0: it did not run)
+  // The reports it expects: its jobs' last where they ran before, and
+  // reports_per_item for the items of the others.
+  uint32_t known_reports = 0;
+  size_t unknown_items = 0;
   // The reports are read before they are counted, up to report_bound
-  // (guessed from the last batch's reports per item).
+  // (expected_reports).
   uint32_t report_bound = 0;
   double reports_per_item = 0;
   size_t load = 0;
@@ -473,7 +477,8 @@ class OpenClExecutor final : public RayExecutor {
       lane.ray_count = 0;
       lane.load = 0;
       lane.upload_base = runtime_->place_on_device ? d.kept_used[(step_ + 1) % 2] : 0;
-      lane.last_reports = lane.ran ? lane.report_count : 0;
+      lane.known_reports = 0;
+      lane.unknown_items = 0;
       lane.pending = false;
       lane.ran = false;
     }
@@ -531,6 +536,11 @@ class OpenClExecutor final : public RayExecutor {
     }
     lane.items += rtcd_uint(items);
     lane.load += items;
+    if (job.residence && job.residence->placed) {
+      lane.known_reports += job.residence->reports;
+    } else {
+      lane.unknown_items += items;
+    }
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves), as bits
@@ -637,7 +647,7 @@ class OpenClExecutor final : public RayExecutor {
   // the residences record, once the recovery reads of two steps ago have
   // read that buffer, and its outcomes counted (rtcd_settle); its reports
   // laid out (rtcd_total, rtcd_reports). Then the reads: the counters, the
-  // summaries, the reports up to a bound guessed from the last batch, and,
+  // summaries, the reports up to a bound guessed from the last step, and,
   // where the host placed the rays, the kept rays. Room is made for `count`
   // rays, an upper bound when they are not counted yet.
   void settle(Device& d, Lane& lane, const GrowingBuffer& firsts, uint32_t count) {
@@ -798,12 +808,12 @@ class OpenClExecutor final : public RayExecutor {
     settle(d, lane, lane.first_rays, lane.items);
   }
 
-  // A batch's reports, guessed before they are counted. Walks: last step's
-  // reports on this device, whose rays they track (a pair keeps its
-  // device); full batches: last batch's reports per item.
+  // A batch's reports, guessed before they are counted: each job's last
+  // where it ran before (a pair's reports change little from step to step,
+  // walked or traced again), the last full batch's reports per item for
+  // the items of new pairs.
   static double expected_reports(const Device& d, const Lane& lane) {
-    if (&lane == &d.lanes[1]) return double(d.lanes[0].last_reports) + d.lanes[1].last_reports;
-    return lane.reports_per_item * lane.items;
+    return lane.known_reports + d.lanes[0].reports_per_item * double(lane.unknown_items);
   }
 
   // After the wait: each job's first ray and report from the summaries, and
@@ -982,13 +992,13 @@ class OpenClExecutor final : public RayExecutor {
       out.clear();
       const uint64_t kept_step = runtime_->place_on_device ? step_ : 0;
       if (lane.ray_count == 0) {  // nothing ran there, and nothing is kept
-        if (job.residence) *job.residence = {kept_step, i, 0, 0, true};
+        if (job.residence) *job.residence = {kept_step, i, 0, 0, true, 0};
         continue;
       }
       const uint32_t first = grid(lane) ? lane.host_first_items[l] : lane.host_first_rays[l];
       const rtcd_job_summary& s = lane.host_summaries[l];
       if (s.kept_origins > s.kept) throw Error("a device returned inconsistent counts for job " + std::to_string(l));
-      if (job.residence) *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true};
+      if (job.residence) *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true, s.contacts + s.predictive};
       const int target_kind = data_.table[dj.target].kind;
       const auto edge_kind = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, dj.params.first_edge));
       out.resize(s.kept);

@@ -333,6 +333,31 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
   EXPECT_LT(reported, walked);
 }
 
+// A full step reads its reports up to a bound from each pair's reports the
+// step before (where the pair ran before: a pair's reports change little
+// from step to step), and the rest, if any, after a second wait; the
+// counters and a summary a job besides.
+TEST(OpenCl, FullStepsReadReportsUpToTheirPairsLastCount) {
+  const size_t pairs = 16;
+  const auto steps = run_scene("opencl:devices=1", {"concave", Mode::full, pairs, 6});
+  expect_ran_on_devices(steps, 1);
+  constexpr size_t kCounters = 8 * 24, kSummary = 20, kReport = 36;
+  size_t short_bounds = 0;
+  for (size_t s = 1; s < steps.size(); ++s) {
+    SCOPED_TRACE("step " + std::to_string(s));
+    const StepResult& last = steps[s - 1];
+    const StepStats& st = steps[s].stats;
+    ASSERT_EQ(st.pairs_full, pairs);
+    const size_t bound = size_t(1.25 * double(last.contacts.size() + last.predictive.size())) + 64;
+    const size_t reports = steps[s].contacts.size() + steps[s].predictive.size();
+    EXPECT_EQ(st.bytes_from_device, kCounters + kSummary * 2 * pairs + kReport * std::max(bound, reports));
+    EXPECT_EQ(st.device_waits, reports > bound ? 2u : 1u);
+    short_bounds += reports > bound;
+  }
+  EXPECT_GT(steps.back().contacts.size(), 64u) << "too few reports: the bound's guess would not matter";
+  EXPECT_EQ(short_bounds, 0u) << "a resting scene's reports stay within their last count's bound";
+}
+
 // A step waits once a device: the device lays out the full batch's ray
 // list itself, the walks are enqueued behind it, and the host reads the
 // counts and the outcomes (up to a bound guessed from the last full batch)

@@ -42,6 +42,7 @@ struct Residence {
   uint32_t first = 0;   // the first of the rays there
   uint32_t count = 0;   // how many: the first `count` kept outcomes
   bool placed = false;  // the pair-direction has run at `place`
+  uint32_t reports = 0;  // placed: the contacts and predictive rays it made there last
 
   void drop_rays() { step = 0; }
 };
