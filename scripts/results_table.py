@@ -442,7 +442,7 @@ def pocl_avalanche_rows():
     detect = {"new": [], "embree": [], "gimpact": [], "fcl": []}
     traffic = {"KB to the devices": [], "KB from the devices": [], "KB recovery reads": [],
                "reports \\(contacts \\+ predictive rays\\)": []}
-    pairs = []
+    pairs = {"B": [], "C": []}
     for section in re.split(r"^## ", text, flags=re.M)[1:]:
         who = section.split()[0]
         row = re.search(r"^\| C \| \d+ \| ([0-9.]+) \|", section, re.M)
@@ -451,12 +451,14 @@ def pocl_avalanche_rows():
                 raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no phase C row")
             detect[who].append(float(row.group(1)))
         if who == "new":
-            pairs.append(float(re.search(r"^\| C \| \d+ \| (?:[^|]+\|){6} ([0-9.]+) \|", section, re.M).group(1)))
+            for phase, values in pairs.items():
+                values.append(float(re.search(rf"^\| {phase} \| \d+ \| (?:[^|]+\|){{6}} ([0-9.]+) \|", section,
+                                              re.M).group(1)))
             for name, values in traffic.items():
-                kb = re.search(rf"^\| {name} \| [0-9.]+ \| [0-9.]+ \| ([0-9.]+) \|", section, re.M)
+                kb = re.search(rf"^\| {name} \| [0-9.]+ \| ([0-9.]+) \| ([0-9.]+) \|", section, re.M)
                 if not kb:
                     raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no '{name}' row")
-                values.append(float(kb.group(1)))
+                values.append((float(kb.group(1)), float(kb.group(2))))  # phases B and C
     if not detect["new"] or not detect["embree"]:
         raise ResultError(f"{where}: no 'new' or 'embree' replay")
     opencl, embree = statistics.median(detect["new"]), statistics.median(detect["embree"])
@@ -465,14 +467,18 @@ def pocl_avalanche_rows():
              if detect[key]]
     if peers:
         value += " (one thread, the same steps: " + ", ".join(peers) + ")"
-    up, down, recovery, reports = (statistics.median(v) for v in traffic.values())
-    bound = (64 * reports + 16 * statistics.median(pairs)) / 1e6
+    b, c = ({name: statistics.median(v[k] for v in values) for name, values in traffic.items()} for k in (0, 1))
+    up, down, recovery, reports = c.values()
+    bound = (64 * reports + 16 * statistics.median(pairs["C"])) / 1e6
+    down_b, reports_b = b["KB from the devices"], b["reports \\(contacts \\+ predictive rays\\)"]
+    bound_b = (64 * reports_b + 16 * statistics.median(pairs["B"])) / 1e6
     return [Row("avalanche phase C detect on PoCL: OpenCL on one `basic` device ÷ Embree on one thread (floor 1.5×)",
                 value, "opencl", source, [stamp]),
             Row("avalanche phase C, bytes a step on PoCL: from the device (floor: 64 × (contacts + predictive rays) + "
-                "16 × pairs, from the same run); the walk starts' recovery reads, apart; to the device (floor: "
-                "64 × bodies + 16 × pairs)",
-                f"{down / 1000:.2f} MB (floor {bound:.2f} MB); {recovery / 1000:.2f} MB; {up / 1000:.2f} MB",
+                "16 × pairs, from the same run; phase B beside it); the walk starts' recovery reads, apart; to the "
+                "device (floor: 64 × bodies + 16 × pairs)",
+                f"{down / 1000:.2f} MB (floor {bound:.2f} MB; B {down_b / 1000:.2f}, floor {bound_b:.2f}); "
+                f"{recovery / 1000:.2f} MB; {up / 1000:.2f} MB",
                 "opencl", source, [stamp])]
 
 
