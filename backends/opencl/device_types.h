@@ -68,20 +68,19 @@ typedef struct {
   rtcd_int entry;
 } rtcd_tracked;
 
-/* A contact or predictive ray of a job, and its place among the job's kept rays. */
+/* A contact or predictive ray, its job (in the batch) and its place among
+ * the job's kept rays. */
 typedef struct {
   rtcd_outcome outcome;
   rtcd_uint place;
+  rtcd_uint job;
 } rtcd_report;
 
-/* What the host reads of a job: its rays, the kept ones among them (the
- * vertex rays first), and those that report. */
+/* What the host reads of every job: its kept rays (the vertex rays
+ * first); its reports come with their job. */
 typedef struct {
-  rtcd_uint rays;
   rtcd_uint kept;
   rtcd_uint kept_origins;
-  rtcd_uint contacts;
-  rtcd_uint predictive;
 } rtcd_job_summary;
 
 #endif

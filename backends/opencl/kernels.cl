@@ -343,47 +343,40 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
   first = firsts[j];                            \
   end = first + ((grid) ? jobs[j].item_count : counts[j])
 
-/* One job's outcomes settled: the rays it goes on tracking (every outcome
- * but the dropped ones, in order) written where the next step's
- * rtcd_select reads them, so they stay on the device, and its outcomes
- * counted (kernel/tally.h) for rtcd_total. */
-__kernel void rtcd_settle(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
-                          __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
-                          __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
-                          rtcd_uint kept_base, __global rtcd_tracked* kept, __global rtcd_tally* tallies) {
+/* One job's outcomes counted (kernel/tally.h) for rtcd_total. */
+__kernel void rtcd_tallies(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
+                           __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
+                           __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
+                           __global rtcd_tally* tallies) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint first, end, k;
   int iterative;
-  __global rtcd_tracked* out;
   rtcd_tally t;
   if (j >= job_count) return;
   RTCD_JOB_RAYS(j, grid, firsts, counts);
   iterative = jobs[j].params.iterative;
-  out = kept + kept_base + first;
   rtcd_tally_clear(&t);
   for (k = first; k < end; ++k) {
     rtcd_outcome o;
     if (grid && !flags[k]) continue;
     o = outcomes[k];
     rtcd_tally_count(&t, &o, iterative);
-    if (o.kind == RTCD_RAY_DROPPED) continue;
-    out->vertex = o.vertex;
-    out->triangle = o.triangle;
-    out->entry = o.entry;
-    ++out;
   }
   tallies[j] = t;
 }
 
-/* Each job's first report (its contacts and predictive rays laid out one
- * job after another) and what the host reads of it, and the batch's
- * counters summed. One work-group, as rtcd_offsets. */
-__kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count, __global rtcd_uint* first_reports,
+/* Each job's first kept ray and first report (the kept rays and the
+ * contacts and predictive rays laid out one job after another), what the
+ * host reads of it, and the batch's counters summed. One work-group, as
+ * rtcd_offsets; `firsts` holds the kept rays' prefixes, then the reports'. */
+__kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count, __global rtcd_uint* firsts,
                          __global rtcd_job_summary* summaries, __global rtcd_tally* total) {
-  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+  __local rtcd_uint kept[RTCD_SCAN_WIDTH], reported[RTCD_SCAN_WIDTH];
   __local rtcd_tally sums[RTCD_SCAN_WIDTH];
   const rtcd_uint lid = get_local_id(0), width = min((rtcd_uint)get_local_size(0), (rtcd_uint)RTCD_SCAN_WIDTH);
-  rtcd_uint j, k, begin = 0, end = 0, n = 0;
+  __global rtcd_uint* first_kept = firsts;
+  __global rtcd_uint* first_reports = firsts + job_count + 1;
+  rtcd_uint j, k, begin = 0, end = 0, n = 0, r = 0;
   if (lid < width) {
     rtcd_tally sum;
     rtcd_tally_clear(&sum);
@@ -391,16 +384,15 @@ __kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count
     for (j = begin; j < end; ++j) {
       rtcd_tally t = tallies[j];
       rtcd_job_summary s;
-      s.rays = (rtcd_uint)(t.candidates + t.edges_tested);
       s.kept = (rtcd_uint)t.kept;
       s.kept_origins = (rtcd_uint)t.kept_origins;
-      s.contacts = (rtcd_uint)t.contacts;
-      s.predictive = (rtcd_uint)t.predictive;
       summaries[j] = s;
-      n += s.contacts + s.predictive;
+      n += s.kept;
+      r += (rtcd_uint)(t.contacts + t.predictive);
       rtcd_tally_add(&sum, &t);
     }
-    partial[lid] = n;
+    kept[lid] = n;
+    reported[lid] = r;
     sums[lid] = sum;
   }
   barrier(CLK_LOCAL_MEM_FENCE);
@@ -412,39 +404,54 @@ __kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count
       rtcd_tally_add(&all, &t);
     }
     *total = all;
-    first_reports[job_count] = rtcd_scan_shares(partial, width);
+    first_kept[job_count] = rtcd_scan_shares(kept, width);
+    first_reports[job_count] = rtcd_scan_shares(reported, width);
   }
   barrier(CLK_LOCAL_MEM_FENCE);
   if (lid >= width) return;
-  n = partial[lid];
+  n = kept[lid];
+  r = reported[lid];
   for (j = begin; j < end; ++j) {
-    first_reports[j] = n;
-    n += summaries[j].contacts + summaries[j].predictive;
+    first_kept[j] = n;
+    first_reports[j] = r;
+    n += (rtcd_uint)tallies[j].kept;
+    r += (rtcd_uint)(tallies[j].contacts + tallies[j].predictive);
   }
 }
 
-/* One job: its outcomes that report (contacts and predictive rays), in
- * order, with their places among its kept rays, so the host reads these
- * whole and the kept rays only as rtcd_settle wrote them. */
-__kernel void rtcd_reports(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
-                          __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
-                          __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
-                          __global const rtcd_uint* first_reports, __global rtcd_report* reports) {
+/* One job's outcomes laid out: the rays it goes on tracking (every outcome
+ * but the dropped ones, in order) from kept_base + its first kept ray on,
+ * where the next step's walks read them, so they stay on the device; and
+ * those that report (contacts and predictive rays), in order, each with
+ * its job and its place among the job's kept rays, so the host reads these
+ * whole and the kept rays only for recovery. */
+__kernel void rtcd_lay_out(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
+                           __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
+                           __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
+                           __global const rtcd_uint* laid_out, rtcd_uint kept_base, __global rtcd_tracked* kept,
+                           __global rtcd_report* reports) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint first, end, k, place = 0;
-  __global rtcd_report* out;
+  __global rtcd_tracked* keep;
+  __global rtcd_report* report;
   if (j >= job_count) return;
   RTCD_JOB_RAYS(j, grid, firsts, counts);
-  out = reports + first_reports[j];
+  keep = kept + kept_base + laid_out[j];
+  report = reports + laid_out[job_count + 1 + j];
   for (k = first; k < end; ++k) {
     rtcd_outcome o;
     if (grid && !flags[k]) continue;
     o = outcomes[k];
     if (o.kind == RTCD_RAY_DROPPED) continue;
+    keep->vertex = o.vertex;
+    keep->triangle = o.triangle;
+    keep->entry = o.entry;
+    ++keep;
     if (o.kind == RTCD_RAY_PENETRATING || o.kind == RTCD_RAY_PREDICTIVE) {
-      out->outcome = o;
-      out->place = place;
-      ++out;
+      report->outcome = o;
+      report->place = place;
+      report->job = j;
+      ++report;
     }
     ++place;
   }

@@ -18,13 +18,14 @@
 //      the CPU's order, laid out on the device;
 //   3. rtcd_scatter and rtcd_trace: candidates to their places, then one
 //      work-item per ray running kernel/trace.h;
-//   4. rtcd_settle, rtcd_total and rtcd_reports: the rays each job goes on
-//      tracking stay on the device for the next step's walks; its outcomes
-//      are counted there (kernel/tally.h), and those that report (contacts,
-//      predictive rays) are laid out by job. After one wait the host reads
-//      the counters, a summary a job and the reports whole (up to a bound
-//      guessed from each pair's reports the step before; past it, a second
-//      read and wait), and
+//   4. rtcd_tallies, rtcd_total and rtcd_lay_out: each job's outcomes are
+//      counted there (kernel/tally.h); the rays it goes on tracking stay on
+//      the device for the next step's walks, one job after another, and
+//      those that report (contacts, predictive rays) are laid out by job,
+//      each naming its job. After one wait the host reads the counters, 8
+//      bytes a job (its kept rays and kept vertex rays) and the reports
+//      whole (up to a bound guessed from each pair's reports the step
+//      before; past it, a second read and wait), and
 //      builds each job's kept outcomes in its slot: the reports in their
 //      places, placeholders (kind and edge) for the rest, so the step is in
 //      job order (poses and setups go up; no other outcome comes down).
@@ -60,7 +61,7 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
 static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
-static_assert(sizeof(rtcd_report) == 36 && sizeof(rtcd_job_summary) == 20 && sizeof(rtcd_tally) == 8 * 24);
+static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
 static_assert(sizeof(rtcd_job_setup) == 64 && alignof(rtcd_job_setup) == 8 && sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
@@ -88,7 +89,7 @@ constexpr size_t kTracedShapeBuffers = kOrigins;
 // batch runs on the device while the walks are set up.
 struct Lane {
   GrowingBuffer setups, jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
-  GrowingBuffer tallies, first_reports, summaries, total, reports;
+  GrowingBuffer tallies, laid_out, summaries, total, reports;
   // The jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
@@ -98,11 +99,11 @@ struct Lane {
   std::vector<rtcd_uint> host_near;  // full jobs' near-leaf bits, by source-tree node
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
-  // What comes back: the batch's counters, a summary a job, the reports by
-  // job (host_first_reports), and the kept rays by job from kept_base on.
+  // What comes back: the batch's counters, a summary a job and the reports
+  // by job; the kept rays lie by job from kept_base on (host_first_kept).
   std::vector<rtcd_tally> host_total;  // one
   std::vector<rtcd_job_summary> host_summaries;
-  std::vector<rtcd_uint> host_first_reports;
+  std::vector<rtcd_uint> host_first_kept;
   std::vector<rtcd_report> host_reports;
   std::vector<rtcd_tracked> host_kept;  // the host placed the rays: it reads them whole
   uint32_t items = 0, ray_count = 0, report_count = 0;
@@ -124,14 +125,14 @@ struct Lane {
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel prepare, select, count, offsets, scatter, trace, trace_items, settle, total, report;
+  cl::Kernel prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
   GrowingBuffer poses;         // every body's, the step's (rtcd_pose)
   uint64_t poses_written = 0;  // the step they are
   // Tracked rays that stay on the device, by step parity: the step's
-  // batches append what they keep to one (rtcd_settle) while its walks read
+  // batches append what they keep to one (rtcd_lay_out) while its walks read
   // the other, written the step before, with the rays that came from
   // elsewhere (the host's mirror) appended there.
   GrowingBuffer kept[2];
@@ -183,13 +184,13 @@ class OpenClExecutor final : public RayExecutor {
         device.offsets = cl::Kernel(runtime_->program, "rtcd_offsets");
         device.scatter = cl::Kernel(runtime_->program, "rtcd_scatter");
         device.trace = cl::Kernel(runtime_->program, "rtcd_trace");
-        device.settle = cl::Kernel(runtime_->program, "rtcd_settle");
+        device.tallies = cl::Kernel(runtime_->program, "rtcd_tallies");
         device.total = cl::Kernel(runtime_->program, "rtcd_total");
-        device.report = cl::Kernel(runtime_->program, "rtcd_reports");
+        device.lay_out = cl::Kernel(runtime_->program, "rtcd_lay_out");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
              {&device.prepare, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
-              &device.trace_items, &device.settle, &device.total, &device.report})
+              &device.trace_items, &device.tallies, &device.total, &device.lay_out})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
@@ -642,14 +643,14 @@ class OpenClExecutor final : public RayExecutor {
     launch(d, k, rays);
   }
 
-  // After the trace, on the device: each job's kept rays written past
-  // kept_base at the place of its items (grid) or rays (compacted), which
-  // the residences record, once the recovery reads of two steps ago have
-  // read that buffer, and its outcomes counted (rtcd_settle); its reports
-  // laid out (rtcd_total, rtcd_reports). Then the reads: the counters, the
-  // summaries, the reports up to a bound guessed from the last step, and,
-  // where the host placed the rays, the kept rays. Room is made for `count`
-  // rays, an upper bound when they are not counted yet.
+  // After the trace, on the device: each job's outcomes counted
+  // (rtcd_tallies, rtcd_total), its kept rays written one job after
+  // another past kept_base, where the residences record them, once the
+  // recovery reads of two steps ago have read that buffer, and its reports
+  // laid out (rtcd_lay_out). Then the reads: the counters, the summaries,
+  // the reports up to a bound guessed from the last step, and, where the
+  // host placed the rays, the kept rays. Room is made for `count` rays, an
+  // upper bound when they are not counted yet.
   void settle(Device& d, Lane& lane, const GrowingBuffer& firsts, uint32_t count) {
     const auto jobs_count = rtcd_uint(lane.host_jobs.size());
     GrowingBuffer& kept = d.kept[step_ % 2];
@@ -659,28 +660,27 @@ class OpenClExecutor final : public RayExecutor {
     used += count;
     reserve(lane.flags, 1);  // bound unread by the compacted layout
     reserve(lane.tallies, jobs_count * sizeof(rtcd_tally));
-    reserve(lane.first_reports, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
+    reserve(lane.laid_out, 2 * (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
     reserve(lane.summaries, jobs_count * sizeof(rtcd_job_summary));
     reserve(lane.total, sizeof(rtcd_tally));
     reserve(lane.reports, count * sizeof(rtcd_report));
     const rtcd_uint in_grid = grid(lane);
     const cl::Buffer& counts = in_grid ? firsts.buffer : lane.counts.buffer;  // the grid reads item counts
-    // rtcd_settle and rtcd_reports open with the arguments that find each
+    // rtcd_tallies and rtcd_lay_out open with the arguments that find each
     // job's outcomes (RTCD_JOB_RAYS).
     const auto bind_job_rays = [&](cl::Kernel& k) {
       return set_args(k, 0, lane.jobs.buffer, jobs_count, in_grid, firsts.buffer, counts, lane.flags.buffer,
                       lane.outcomes.buffer);
     };
-    cl::Kernel& s = d.settle;
-    set_args(s, bind_job_rays(s), lane.kept_base, kept.buffer, lane.tallies.buffer);
-    launch(d, s, jobs_count, &d.recovering[step_ % 2]);
+    cl::Kernel& c = d.tallies;
+    set_args(c, bind_job_rays(c), lane.tallies.buffer);
+    launch(d, c, jobs_count);
     cl::Kernel& t = d.total;
-    set_args(t, 0, lane.tallies.buffer, jobs_count, lane.first_reports.buffer, lane.summaries.buffer,
-             lane.total.buffer);
+    set_args(t, 0, lane.tallies.buffer, jobs_count, lane.laid_out.buffer, lane.summaries.buffer, lane.total.buffer);
     launch_group(d, t);
-    cl::Kernel& r = d.report;
-    set_args(r, bind_job_rays(r), lane.first_reports.buffer, lane.reports.buffer);
-    launch(d, r, jobs_count);
+    cl::Kernel& l = d.lay_out;
+    set_args(l, bind_job_rays(l), lane.laid_out.buffer, lane.kept_base, kept.buffer, lane.reports.buffer);
+    launch(d, l, jobs_count, &d.recovering[step_ % 2]);
     lane.host_total.resize(1);
     lane.host_summaries.resize(jobs_count);
     lane.host_reports.resize(count);
@@ -816,26 +816,28 @@ class OpenClExecutor final : public RayExecutor {
     return lane.known_reports + d.lanes[0].reports_per_item * double(lane.unknown_items);
   }
 
-  // After the wait: each job's first ray and report from the summaries, and
-  // the reports the guessed bound left unread, enqueued behind `last`;
-  // returns whether there were any.
+  // After the wait: each job's first kept ray from the summaries, and the
+  // reports the guessed bound left unread, enqueued behind `last`; returns
+  // whether there were any.
   bool count_results(Device& d, Lane& lane, cl::Event& last) {
     const size_t jobs = lane.host_summaries.size();
-    lane.host_first_rays.resize(jobs + 1);
-    lane.host_first_reports.resize(jobs + 1);
-    uint32_t rays = 0, reports = 0;
+    const rtcd_tally& total = lane.host_total[0];
+    lane.host_first_kept.resize(jobs + 1);
+    uint64_t kept = 0;
     for (size_t l = 0; l < jobs; ++l) {
       const rtcd_job_summary& s = lane.host_summaries[l];
       // The device's counts place what the host reads: they must fit.
-      if (s.kept > s.rays || s.contacts + s.predictive > s.kept || s.rays > lane.host_jobs[l].item_count)
+      if (s.kept_origins > s.kept || s.kept > lane.host_jobs[l].item_count)
         throw Error("a device returned inconsistent counts for job " + std::to_string(l));
-      lane.host_first_rays[l] = rays;
-      lane.host_first_reports[l] = reports;
-      rays += s.rays;
-      reports += s.contacts + s.predictive;
+      lane.host_first_kept[l] = rtcd_uint(kept);
+      kept += s.kept;
     }
-    lane.host_first_rays[jobs] = lane.ray_count = rays;
-    lane.host_first_reports[jobs] = lane.report_count = reports;
+    const uint64_t rays = total.candidates + total.edges_tested, reports = total.contacts + total.predictive;
+    if (kept != total.kept || rays > lane.items || reports > kept)
+      throw Error("a device returned inconsistent counts for a batch");
+    lane.host_first_kept[jobs] = rtcd_uint(kept);
+    lane.ray_count = uint32_t(rays);
+    lane.report_count = uint32_t(reports);
     lane.reports_per_item = double(reports) / lane.items;
     if (reports <= lane.report_bound) return false;
     read(d, lane.reports, 0, lane.host_reports, lane.report_bound, reports - lane.report_bound, &last);
@@ -909,7 +911,8 @@ class OpenClExecutor final : public RayExecutor {
     starts.resize(d.kept_used[parity]);
     for (const Lane& lane : d.lanes) {
       if (!lane.ran || lane.ray_count == 0) continue;
-      const size_t count = grid(lane) ? lane.items : lane.ray_count;
+      const size_t count = lane.host_first_kept.back();
+      if (count == 0) continue;
       d.recovery.enqueueReadBuffer(d.kept[parity].buffer, CL_FALSE, lane.kept_base * sizeof(rtcd_tracked),
                                    count * sizeof(rtcd_tracked), starts.data() + lane.kept_base, nullptr,
                                    &d.recovering[parity].emplace_back());
@@ -980,6 +983,10 @@ class OpenClExecutor final : public RayExecutor {
   // where their kept rays are, for the next step.
   void deliver(uint32_t i, const Lane& lane, RayBatch& batch) {
     Device& d = devices_[i];
+    if (lane.ray_count > 0) d.work.rays += lane.ray_count;
+    // The reports come in job order, each naming its job.
+    const rtcd_report* report = lane.host_reports.data();
+    const rtcd_report* const reports_end = report + (lane.ray_count > 0 ? lane.report_count : 0);
     for (size_t l = 0; l < lane.batch_jobs.size(); ++l) {
       const uint32_t j = lane.batch_jobs[l];
       const RayJob& job = batch.jobs[j];
@@ -995,10 +1002,8 @@ class OpenClExecutor final : public RayExecutor {
         if (job.residence) *job.residence = {kept_step, i, 0, 0, true, 0};
         continue;
       }
-      const uint32_t first = grid(lane) ? lane.host_first_items[l] : lane.host_first_rays[l];
+      const uint32_t first = lane.host_first_kept[l];
       const rtcd_job_summary& s = lane.host_summaries[l];
-      if (s.kept_origins > s.kept) throw Error("a device returned inconsistent counts for job " + std::to_string(l));
-      if (job.residence) *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true, s.contacts + s.predictive};
       const int target_kind = data_.table[dj.target].kind;
       const auto edge_kind = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, dj.params.first_edge));
       out.resize(s.kept);
@@ -1015,15 +1020,16 @@ class OpenClExecutor final : public RayExecutor {
         o.kind = RTCD_RAY_WATCHED;
         o.edge = k < s.kept_origins ? rtcd_uchar(RTCD_ITEM_ORIGIN) : edge_kind;
       }
-      const rtcd_report* report = lane.host_reports.data() + lane.host_first_reports[l];
-      for (uint32_t k = 0; k < s.contacts + s.predictive; ++k) {
-        if (report[k].place >= s.kept) throw Error("a device returned a report out of place for job " + std::to_string(l));
-        out[report[k].place] = report[k].outcome;
+      for (; report != reports_end && report->job == l; ++report) {
+        if (report->place >= s.kept) throw Error("a device returned a report out of place for job " + std::to_string(l));
+        out[report->place] = report->outcome;
+        tally.contacts += report->outcome.kind == RTCD_RAY_PENETRATING;
+        tally.predictive += report->outcome.kind == RTCD_RAY_PREDICTIVE;
       }
-      tally.contacts = s.contacts;
-      tally.predictive = s.predictive;
-      d.work.rays += s.rays;
+      if (job.residence)
+        *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true, uint32_t(tally.contacts + tally.predictive)};
     }
+    if (report != reports_end) throw Error("a device returned a report out of its job's order");
   }
 
   std::string name_;
