@@ -82,12 +82,13 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
 }
 
 #ifdef RTCD_HAS_DOUBLE
-/* One job, before its items, made from its setup as the host makes it: its
+/* One job, before its items, made from its pair's setup (job j is
+ * direction j % 2 of pair j / 2) as the host makes it: its
  * parameters (rtcd_make_params), its first item, and its frame from its
  * bodies' poses (rtcd_relative_frame); for a full job, the source items
  * (origins, then edges) of its near leaves, in item order, listed as its
  * items (the host counted them). */
-__kernel void rtcd_prepare(__global const rtcd_job_setup* setups, rtcd_uint job_count, rtcd_uint config,
+__kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job_count, rtcd_uint config,
                            __global const rtcd_device_shape* shapes, __global const rtcd_shape_traits* traits,
                            __global const rtcd_box* bounds, __global const rtcd_uint* source_leaves,
                            __global const rtcd_uint* near_bits, __global const rtcd_pose* poses,
@@ -95,6 +96,7 @@ __kernel void rtcd_prepare(__global const rtcd_job_setup* setups, rtcd_uint job_
                            __global rtcd_frame* frames, __global rtcd_uint* vertices) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint v, n, count;
+  rtcd_pair_setup pair;
   rtcd_job_setup s;
   rtcd_device_job job;
   rtcd_shape_traits source_traits, target_traits;
@@ -103,7 +105,8 @@ __kernel void rtcd_prepare(__global const rtcd_job_setup* setups, rtcd_uint job_
   rtcd_frame frame;
   __global const rtcd_uint* leaves;
   if (j >= job_count) return;
-  s = setups[j];
+  pair = setups[j / 2];
+  s = rtcd_direction_setup(&pair, j % 2);
   source_traits = traits[s.source];
   target_traits = traits[s.target];
   source_bounds = bounds[s.source];

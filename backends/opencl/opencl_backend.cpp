@@ -4,9 +4,10 @@
 // the device holding its tracked rays; the others go to the least loaded
 // by expected rays), each device with its own queue, and all devices run
 // at once:
-//   1. rtcd_prepare: each job made from its 64-byte setup (parameters,
-//      first item) and its frame from its bodies' poses, by the host's own
-//      functions (kernel/job.h, kernel/frame.h), then rtcd_select: every
+//   1. rtcd_prepare: each job made from its pair's 72-byte setup (both
+//      directions: parameters, first items) and its frame from its bodies'
+//      poses, by the host's own functions (kernel/job.h, kernel/frame.h),
+//      then rtcd_select: every
 //      possible ray (source item: a vertex or an edge, or tracked ray)
 //      placed in the target's frame in double and flagged when it is a
 //      candidate (the host makes the frames and places the rays when a
@@ -63,7 +64,8 @@ static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && size
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
-static_assert(sizeof(rtcd_job_setup) == 64 && alignof(rtcd_job_setup) == 8 && sizeof(rtcd_pose) == 56 &&
+static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 72 && alignof(rtcd_pair_setup) == 8 &&
+              sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
 
 constexpr size_t kGroupSize = 64;
@@ -94,7 +96,7 @@ struct Lane {
   std::vector<uint32_t> batch_jobs;
   std::vector<rtcd_device_job> host_jobs;
   std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
-  std::vector<rtcd_job_setup> host_setups;  // the device makes the jobs and frames from them (rtcd_prepare)
+  std::vector<rtcd_pair_setup> host_setups;  // the device makes the jobs and frames from them (rtcd_prepare)
   std::vector<rtcd_frame> host_frames;      // the host places the rays: it makes the frames
   std::vector<rtcd_uint> host_near;  // full jobs' near-leaf bits, by source-tree node
   std::vector<rtcd_tracked> host_tracked;
@@ -512,11 +514,13 @@ class OpenClExecutor final : public RayExecutor {
     dj.target = job.target;
     dj.first_item = lane.items;
     dj.item_count = rtcd_uint(items);
-    if (resident(job)) {
+    if (!job.iterative) {
+      dj.first_tracked = 0;
+    } else if (resident(job)) {
       dj.first_tracked = job.residence->first;
     } else {
       dj.first_tracked = lane.upload_base + rtcd_uint(lane.host_tracked.size());
-      if (job.iterative && items > 0) {
+      if (items > 0) {
         for (const RayOutcome& r : job.tracked) {
           if (r.vertex == kPlaceholder) throw Error("a tracked ray to upload was never recovered");
           lane.host_tracked.push_back({r.vertex, r.triangle, r.entry});
@@ -527,11 +531,12 @@ class OpenClExecutor final : public RayExecutor {
     lane.host_jobs.push_back(dj);
     lane.host_first_items.push_back(lane.items);
     if (runtime_->place_on_device) {
-      rtcd_job_setup& setup = lane.host_setups.emplace_back(job_setup(job, config));
+      rtcd_job_setup setup = job_setup(job, config);
       setup.first_item = dj.first_item;
       setup.item_count = dj.item_count;
       setup.first_tracked = dj.first_tracked;
       setup.first_near = dj.first_near;
+      add_direction(lane, setup);
     } else {
       lane.host_frames.push_back(make_frame(job));
     }
@@ -542,6 +547,34 @@ class OpenClExecutor final : public RayExecutor {
     } else {
       lane.unknown_items += items;
     }
+  }
+
+  // A job's setup into its pair's: the first of a lane's two jobs of a
+  // pair (assign adds them one after the other) opens it; the second must
+  // be the same pair the other way, its items following the first's.
+  static void add_direction(Lane& lane, const rtcd_job_setup& s) {
+    const uint32_t d = (lane.batch_jobs.size() - 1) % 2;
+    const rtcd_uint first = s.flags & RTCD_JOB_ITERATIVE ? s.first_tracked : s.first_near;
+    const rtcd_uint edges = s.flags & RTCD_JOB_EDGES ? RTCD_PAIR_EDGES(d) : 0u;
+    if (d == 0) {
+      rtcd_pair_setup& p = lane.host_setups.emplace_back();
+      p = {s.extension,     s.reach,
+           s.moved,         {s.source_body, s.target_body},
+           {s.source, s.target}, s.max_walk_steps,
+           (s.flags & RTCD_JOB_ITERATIVE) | edges, s.first_item,
+           {s.item_count, 0},   {first, 0},
+           0};
+      return;
+    }
+    rtcd_pair_setup& p = lane.host_setups.back();
+    if (s.source_body != p.bodies[1] || s.target_body != p.bodies[0] || s.source != p.shapes[1] ||
+        s.target != p.shapes[0] || s.extension != p.extension || s.reach != p.reach || s.moved != p.moved ||
+        s.max_walk_steps != p.max_walk_steps || (s.flags & RTCD_JOB_ITERATIVE) != (p.flags & RTCD_JOB_ITERATIVE) ||
+        s.first_item != p.first_item + p.item_count[0])
+      throw Error("a batch's jobs 2i and 2i + 1 are not one pair's two directions");
+    p.flags |= edges;
+    p.item_count[1] = s.item_count;
+    p.first[1] = first;
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves), as bits

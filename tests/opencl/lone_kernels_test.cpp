@@ -134,9 +134,10 @@ TEST(OpenClScans, TotalsAreTheHostsSumsAroundGroupMultiples) {
   }
 }
 
-// Random setups, shapes, poses far from the origin and configurations: the
-// jobs, first items and frames rtcd_prepare makes are those the host's
-// rtcd_make_params and rtcd_relative_frame make, bit for bit, and the frame
+// Random pair setups, shapes, poses far from the origin and configurations:
+// the jobs, first items and frames rtcd_prepare makes are those the host's
+// rtcd_make_params and rtcd_relative_frame make from each direction's setup,
+// bit for bit, and the frame
 // is the transform target⁻¹ ∘ source (Eigen's, to rounding).
 TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   const auto rt = runtime();
@@ -162,35 +163,51 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     const rtcd_int kind = rtcd_int(i % 4);  // mesh, sphere, box, half-space
     traits[i] = {kind, rtcd_int(bit(g)), word(g), kind == RTCD_TARGET_SPHERE ? float(size(g)) : 0.0f};
   }
-  std::vector<rtcd_job_setup> setups(kJobs);
+  std::vector<rtcd_pair_setup> pairs(kJobs / 2);
   std::uniform_int_distribution<rtcd_uint> body(0, kBodies - 1), shape(0, kShapes - 1);
-  for (size_t j = 0; j < kJobs; ++j) {
-    rtcd_job_setup& s = setups[j];
-    s.extension = size(g) / 10;
-    s.reach = size(g) / 20;
-    s.moved = size(g) / 30;
-    s.source_body = body(g);
-    s.target_body = body(g);
+  for (size_t i = 0; i < pairs.size(); ++i) {
+    rtcd_pair_setup& p = pairs[i];
+    p.extension = size(g) / 10;
+    p.reach = size(g) / 20;
+    p.moved = size(g) / 30;
+    p.bodies[0] = body(g);
+    p.bodies[1] = body(g);
     // Neighbours a few units apart (the candidate box not empty), and any two.
-    if (j % 2 == 0) {
-      s.target_body = (s.source_body + 1) % kBodies;
-      for (int k = 0; k < 3; ++k) poses[s.target_body].position[k] = poses[s.source_body].position[k] + unit(g);
+    if (i % 2 == 0) {
+      p.bodies[1] = (p.bodies[0] + 1) % kBodies;
+      for (int k = 0; k < 3; ++k) poses[p.bodies[1]].position[k] = poses[p.bodies[0]].position[k] + unit(g);
     }
-    s.source = shape(g);
-    s.target = shape(g);
-    s.max_walk_steps = word(g);
-    s.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_JOB_EDGES : 0u);  // nothing to list: jobs and frames alone
-    s.first_item = rtcd_uint(j) * 3;
-    s.item_count = word(g);
-    s.first_tracked = word(g);
-    s.first_near = word(g);
+    p.shapes[0] = shape(g);
+    p.shapes[1] = shape(g);
+    p.max_walk_steps = word(g);
+    // Walks: nothing to list, the jobs and frames alone.
+    p.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_PAIR_EDGES(0) : 0u) | (bit(g) ? RTCD_PAIR_EDGES(1) : 0u);
+    p.first_item = rtcd_uint(i) * 3000;
+    p.item_count[0] = word(g);
+    p.item_count[1] = word(g);
+    p.first[0] = word(g);
+    p.first[1] = word(g);
+  }
+  // Job j is direction j % 2 of pair j / 2: the first body's rays at the
+  // second, then the other way, its items after the first's.
+  std::vector<rtcd_job_setup> setups(kJobs);
+  for (size_t j = 0; j < kJobs; ++j) {
+    const rtcd_pair_setup& p = pairs[j / 2];
+    const rtcd_uint d = j % 2;
+    rtcd_job_setup& s = setups[j] = rtcd_direction_setup(&p, d);
+    ASSERT_EQ(s.source_body, p.bodies[d]);
+    ASSERT_EQ(s.target_body, p.bodies[1 - d]);
+    ASSERT_EQ(s.target, p.shapes[1 - d]);
+    ASSERT_EQ(s.first_item, d == 0 ? p.first_item : p.first_item + p.item_count[0]);
+    ASSERT_EQ(s.first_tracked, p.first[d]);
+    ASSERT_EQ((s.flags & RTCD_JOB_EDGES) != 0, (p.flags & RTCD_PAIR_EDGES(d)) != 0);
   }
   std::vector<rtcd_device_shape> table(kShapes);
   std::vector<rtcd_uint> unused(1), first_items(kJobs);
   std::vector<rtcd_device_job> jobs(kJobs);
   std::vector<rtcd_frame> frames(kJobs);
   // Buffers outlive the kernel's use: setting an argument does not retain one.
-  const cl::Buffer setups_buffer = buffer_of(*rt, setups), jobs_buffer = buffer_of(*rt, jobs),
+  const cl::Buffer setups_buffer = buffer_of(*rt, pairs), jobs_buffer = buffer_of(*rt, jobs),
                    firsts_buffer = buffer_of(*rt, first_items), frames_buffer = buffer_of(*rt, frames);
   cl::Kernel k(rt->program, "rtcd_prepare");
   cl::CommandQueue queue(rt->context, rt->devices.front());

@@ -304,9 +304,10 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
   const auto steps = run_scene("opencl:devices=1", {"concave", Mode::iterative, pairs, 6});
   expect_ran_on_devices(steps, 1);
   constexpr size_t kCounters = 8 * 24, kSummary = 8, kKept = 12, kReport = 40;
-  // Up: every body's pose and a setup a job (its parameters, first item
-  // and frame are made on the device); the walks' rays are there already.
-  constexpr size_t kPose = 56, kJob = 64;
+  // Up: every body's pose and a setup a pair (both directions' parameters,
+  // first items and frames are made on the device); the walks' rays are
+  // there already.
+  constexpr size_t kPose = 56, kPair = 72;
   size_t walked = 0, reported = 0;
   for (size_t s = 2; s < steps.size(); ++s) {
     SCOPED_TRACE("step " + std::to_string(s));
@@ -324,7 +325,7 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
     // one job after another on the device: all read back apart.
     const size_t kept = steps[s].contacts.size() + steps[s].predictive.size() + st.rays_watched;
     EXPECT_EQ(st.bytes_recovery, kKept * kept);
-    EXPECT_EQ(st.bytes_to_device, kPose * 2 * pairs + kJob * 2 * pairs);
+    EXPECT_EQ(st.bytes_to_device, kPose * 2 * pairs + kPair * pairs);
     EXPECT_EQ(st.device_waits, 1u);
     walked += items;
     reported += steps[s].contacts.size() + steps[s].predictive.size();

@@ -56,6 +56,47 @@ typedef struct {
   rtcd_uint first_near;    /* full jobs: its words of near-leaf bits */
 } rtcd_job_setup;
 
+/* RTCD_JOB_EDGES of a pair setup's direction d. */
+#define RTCD_PAIR_EDGES(d) (RTCD_JOB_EDGES << (d))
+
+/* One pair as the host decided it, both directions in one: direction 0
+ * casts the first body's rays against the second, direction 1 the
+ * second's against the first. The directions share the limits, the motion
+ * and the mode, and their items follow one another. 72 bytes. */
+typedef struct {
+  double extension;
+  double reach;
+  double moved;
+  rtcd_uint bodies[2];
+  rtcd_uint shapes[2];
+  rtcd_uint max_walk_steps;
+  rtcd_uint flags;      /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d) */
+  rtcd_uint first_item; /* direction 0's */
+  rtcd_uint item_count[2];
+  rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its words of near-leaf bits */
+  rtcd_uint unused;
+} rtcd_pair_setup;
+
+/* Direction d's setup. */
+RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_uint d) {
+  rtcd_job_setup s;
+  const int iterative = (p->flags & RTCD_JOB_ITERATIVE) != 0;
+  s.extension = p->extension;
+  s.reach = p->reach;
+  s.moved = p->moved;
+  s.source_body = p->bodies[d];
+  s.target_body = p->bodies[1 - d];
+  s.source = p->shapes[d];
+  s.target = p->shapes[1 - d];
+  s.max_walk_steps = p->max_walk_steps;
+  s.flags = (p->flags & RTCD_JOB_ITERATIVE) | ((p->flags & RTCD_PAIR_EDGES(d)) ? RTCD_JOB_EDGES : 0u);
+  s.first_item = p->first_item + (d ? p->item_count[0] : 0u);
+  s.item_count = p->item_count[d];
+  s.first_tracked = iterative ? p->first[d] : 0u;
+  s.first_near = iterative ? 0u : p->first[d];
+  return s;
+}
+
 /* The job's per-ray parameters. Watching serves only later walks, which
  * full mode never makes; it belongs to the predictive logic and is off
  * with it. A convex target cannot fold between a ray's entry and exit
