@@ -36,7 +36,7 @@ typedef struct {
   rtcd_uint first_item;
   rtcd_uint item_count;
   rtcd_uint first_tracked; /* iterative jobs: the job's tracked rays */
-  rtcd_uint first_near;    /* full jobs: the job's words of near-leaf bits */
+  rtcd_uint first_near;    /* full jobs: where its near leaves are (rtcd_near_leaf) */
 } rtcd_device_job;
 
 #ifdef RTCD_HAS_DOUBLE
@@ -56,9 +56,22 @@ RTCD_INLINE rtcd_device_job rtcd_device_job_of(rtcd_uint config, const rtcd_job_
 }
 #endif
 
-/* Whether a full job's near-leaf bits hold source-tree node `leaf`. */
-RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* bits, rtcd_uint leaf) {
-  return (int)((bits[leaf / 32] >> (leaf % 32)) & 1u);
+/* A full job's near leaves (source-tree nodes) as the host sends them, the
+ * shorter of two forms: a header word RTCD_NEAR_BITS and one bit a node, or
+ * a header word n and the n leaves' nodes in increasing order. */
+#define RTCD_NEAR_BITS 0xffffffffu
+
+/* Whether a job's near leaves hold source-tree node `leaf`. */
+RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint leaf) {
+  rtcd_uint lo = 1, hi;
+  if (near[0] == RTCD_NEAR_BITS) return (int)((near[1 + leaf / 32] >> (leaf % 32)) & 1u);
+  hi = 1 + near[0];
+  while (lo < hi) { /* the first listed node >= leaf */
+    rtcd_uint mid = lo + (hi - lo) / 2;
+    if (near[mid] < leaf) lo = mid + 1;
+    else hi = mid;
+  }
+  return lo < 1 + near[0] && near[lo] == leaf;
 }
 
 /* A tracked ray on a device: the walk-start fields of the rtcd_outcome that kept it. */

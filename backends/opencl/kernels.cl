@@ -91,7 +91,7 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
 __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job_count, rtcd_uint config,
                            __global const rtcd_device_shape* shapes, __global const rtcd_shape_traits* traits,
                            __global const rtcd_box* bounds, __global const rtcd_uint* source_leaves,
-                           __global const rtcd_uint* near_bits, __global const rtcd_pose* poses,
+                           __global const rtcd_uint* near, __global const rtcd_pose* poses,
                            __global rtcd_device_job* jobs, __global rtcd_uint* first_items,
                            __global rtcd_frame* frames, __global rtcd_uint* vertices) {
   rtcd_uint j = get_global_id(0);
@@ -123,7 +123,7 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   count = shapes[job.source].source_count;
   n = job.first_item;
   for (v = 0; v < count; ++v)
-    if (rtcd_near_leaf(near_bits + job.first_near, leaves[v])) vertices[n++] = v;
+    if (rtcd_near_leaf(near + job.first_near, leaves[v])) vertices[n++] = v;
 }
 
 /* Item i: the possible ray placed in the target's frame (rtcd_place_ray, in

@@ -13,7 +13,8 @@
 //      candidate (the host makes the frames and places the rays when a
 //      device lacks fp64); a full job's possible rays are the items of the
 //      source-tree leaves near its overlap box, which the host finds and
-//      sends as one bit per node, and rtcd_prepare lists in item order;
+//      sends as a list or one bit per node, whichever is shorter, and
+//      rtcd_prepare lists in item order;
 //   2. rtcd_count and rtcd_offsets: per job, a prefix sum over the flags,
 //      then one over the jobs, so the candidates form a compacted list in
 //      the CPU's order, laid out on the device;
@@ -98,7 +99,8 @@ struct Lane {
   std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
   std::vector<rtcd_pair_setup> host_setups;  // the device makes the jobs and frames from them (rtcd_prepare)
   std::vector<rtcd_frame> host_frames;      // the host places the rays: it makes the frames
-  std::vector<rtcd_uint> host_near;  // full jobs' near-leaf bits, by source-tree node
+  std::vector<rtcd_uint> host_near;  // full jobs' near leaves (rtcd_near_leaf)
+  std::vector<rtcd_uint> leaves;     // a job's near leaves, while it is added
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
   // What comes back: the batch's counters, a summary a job and the reports
@@ -577,18 +579,29 @@ class OpenClExecutor final : public RayExecutor {
     p.first[1] = first;
   }
 
-  // A full job's leaves near its overlap box (visit_near_leaves), as bits
-  // by node appended to the batch's; returns how many items they hold.
+  // A full job's leaves near its overlap box (visit_near_leaves) appended
+  // to the batch's in the shorter form (rtcd_near_leaf): their list, or
+  // bits by source-tree node; returns how many items they hold.
   size_t mark_near_leaves(Lane& lane, const RayJob& job, rtcd_device_job& dj) const {
     const RaySources& rs = shapes_[job.source]->sources();
-    dj.first_near = rtcd_uint(lane.host_near.size());
-    lane.host_near.resize(lane.host_near.size() + (rs.nodes.size() + 31) / 32, 0);
-    rtcd_uint* bits = lane.host_near.data() + dj.first_near;
+    lane.leaves.clear();
     size_t items = 0;
     visit_near_leaves(job, rs, shapes_[job.target]->distance_bound(), edge_reach(dj.params), [&](uint32_t n) {
-      bits[n / 32] |= rtcd_uint(1) << (n % 32);
+      lane.leaves.push_back(n);
       items += rs.items_of(n).size();
     });
+    dj.first_near = rtcd_uint(lane.host_near.size());
+    const size_t words = (rs.nodes.size() + 31) / 32;
+    if (lane.leaves.size() < words) {
+      std::sort(lane.leaves.begin(), lane.leaves.end());
+      lane.host_near.push_back(rtcd_uint(lane.leaves.size()));
+      lane.host_near.insert(lane.host_near.end(), lane.leaves.begin(), lane.leaves.end());
+    } else {
+      lane.host_near.push_back(RTCD_NEAR_BITS);
+      lane.host_near.resize(lane.host_near.size() + words, 0);
+      rtcd_uint* bits = lane.host_near.data() + dj.first_near + 1;
+      for (const uint32_t n : lane.leaves) bits[n / 32] |= rtcd_uint(1) << (n % 32);
+    }
     return items;
   }
 

@@ -53,7 +53,7 @@ typedef struct {
   rtcd_uint first_item;
   rtcd_uint item_count;
   rtcd_uint first_tracked; /* iterative jobs: where its tracked rays are */
-  rtcd_uint first_near;    /* full jobs: its words of near-leaf bits */
+  rtcd_uint first_near;    /* full jobs: where its near leaves are */
 } rtcd_job_setup;
 
 /* RTCD_JOB_EDGES of a pair setup's direction d. */
@@ -73,7 +73,7 @@ typedef struct {
   rtcd_uint flags;      /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d) */
   rtcd_uint first_item; /* direction 0's */
   rtcd_uint item_count[2];
-  rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its words of near-leaf bits */
+  rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its near leaves */
   rtcd_uint unused;
 } rtcd_pair_setup;
 
