@@ -442,7 +442,7 @@ def pocl_avalanche_rows():
     detect = {"new": [], "embree": [], "gimpact": [], "fcl": []}
     traffic = {"KB to the devices": [], "KB from the devices": [], "KB recovery reads": [],
                "reports \\(contacts \\+ predictive rays\\)": []}
-    pairs = {"B": [], "C": []}
+    pairs = {"A": [], "B": [], "C": []}
     for section in re.split(r"^## ", text, flags=re.M)[1:]:
         who = section.split()[0]
         row = re.search(r"^\| C \| \d+ \| ([0-9.]+) \|", section, re.M)
@@ -455,10 +455,10 @@ def pocl_avalanche_rows():
                 values.append(float(re.search(rf"^\| {phase} \| \d+ \| (?:[^|]+\|){{6}} ([0-9.]+) \|", section,
                                               re.M).group(1)))
             for name, values in traffic.items():
-                kb = re.search(rf"^\| {name} \| [0-9.]+ \| ([0-9.]+) \| ([0-9.]+) \|", section, re.M)
+                kb = re.search(rf"^\| {name} \| ([0-9.]+) \| ([0-9.]+) \| ([0-9.]+) \|", section, re.M)
                 if not kb:
                     raise ResultError(f"{where}: section '{section.splitlines()[0]}' has no '{name}' row")
-                values.append((float(kb.group(1)), float(kb.group(2))))  # phases B and C
+                values.append(tuple(float(kb.group(k)) for k in (1, 2, 3)))  # phases A, B and C
     if not detect["new"] or not detect["embree"]:
         raise ResultError(f"{where}: no 'new' or 'embree' replay")
     opencl, embree = statistics.median(detect["new"]), statistics.median(detect["embree"])
@@ -467,17 +467,23 @@ def pocl_avalanche_rows():
              if detect[key]]
     if peers:
         value += " (one thread, the same steps: " + ", ".join(peers) + ")"
-    b, c = ({name: statistics.median(v[k] for v in values) for name, values in traffic.items()} for k in (0, 1))
-    up, down, recovery, reports = c.values()
+    by_phase = {phase: {name: statistics.median(v[k] for v in values) for name, values in traffic.items()}
+                for k, phase in enumerate("ABC")}
+    up, down, recovery, reports = by_phase["C"].values()
     bound = (64 * reports + 16 * statistics.median(pairs["C"])) / 1e6
-    down_b, reports_b = b["KB from the devices"], b["reports \\(contacts \\+ predictive rays\\)"]
-    bound_b = (64 * reports_b + 16 * statistics.median(pairs["B"])) / 1e6
+
+    def from_device(phase):
+        """Phase A's or B's bytes from the device a step and their floor, in MB."""
+        t = by_phase[phase]
+        floor = (64 * t["reports \\(contacts \\+ predictive rays\\)"] + 16 * statistics.median(pairs[phase])) / 1e6
+        return f"{phase} {t['KB from the devices'] / 1000:.2f}, floor {floor:.2f}"
+
     return [Row("avalanche phase C detect on PoCL: OpenCL on one `basic` device ÷ Embree on one thread (floor 1.5×)",
                 value, "opencl", source, [stamp]),
             Row("avalanche phase C, bytes a step on PoCL: from the device (floor: 64 × (contacts + predictive rays) + "
-                "16 × pairs, from the same run; phase B beside it); the walk starts' recovery reads, apart; to the "
+                "16 × pairs, from the same run; phases B and A beside it); the walk starts' recovery reads, apart; to the "
                 "device (floor: 64 × bodies + 16 × pairs)",
-                f"{down / 1000:.2f} MB (floor {bound:.2f} MB; B {down_b / 1000:.2f}, floor {bound_b:.2f}); "
+                f"{down / 1000:.2f} MB (floor {bound:.2f} MB; {from_device('B')}; {from_device('A')}); "
                 f"{recovery / 1000:.2f} MB; {up / 1000:.2f} MB",
                 "opencl", source, [stamp])]
 
