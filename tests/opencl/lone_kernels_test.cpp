@@ -8,6 +8,8 @@
 // a share's bounds or its prefix would slip. The replays reach a few of
 // these counts only by chance.
 //
+// A full job's near leaves, as a list or as bits, read alike.
+//
 // The jobs: rtcd_prepare makes each job's parameters from its setup and its
 // frame from its bodies' poses by the functions the host runs (the CPU
 // executor's make_trace_params, the pipeline's place); the two must be the
@@ -253,6 +255,33 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     }
   }
   EXPECT_GT(boxes, 4 * kJobs / 10) << "the neighbours' candidate boxes must be boxes, or the test says little";
+}
+
+// A full job's near leaves in either of their forms (rtcd_near_leaf: one
+// bit a node, or the sorted list): random sets of a tree's nodes, empty to
+// full, around word boundaries; each form answers every node as the set.
+TEST(OpenClNearLeaves, ListAndBitsHoldTheSameNodes) {
+  std::mt19937 g(14);
+  for (const rtcd_uint nodes : {1u, 31u, 32u, 33u, 64u, 65u, 1087u}) {
+    for (const double share : {0.0, 0.01, 0.1, 0.5, 1.0}) {
+      SCOPED_TRACE(std::to_string(nodes) + " nodes, share " + std::to_string(share));
+      std::bernoulli_distribution near(share);
+      std::vector<rtcd_uint> bits{RTCD_NEAR_BITS}, list{0};
+      bits.resize(1 + (nodes + 31) / 32, 0);
+      std::vector<bool> expected(nodes);
+      for (rtcd_uint n = 0; n < nodes; ++n) {
+        if (!near(g)) continue;
+        expected[n] = true;
+        bits[1 + n / 32] |= rtcd_uint(1) << (n % 32);
+        list.push_back(n);
+      }
+      list[0] = rtcd_uint(list.size() - 1);
+      for (rtcd_uint n = 0; n < nodes; ++n) {
+        ASSERT_EQ(rtcd_near_leaf(bits.data(), n), int(expected[n])) << "bits, node " << n;
+        ASSERT_EQ(rtcd_near_leaf(list.data(), n), int(expected[n])) << "list, node " << n;
+      }
+    }
+  }
 }
 
 }  // namespace
