@@ -24,6 +24,7 @@ struct Scene {
   size_t steps = 4;
   uint64_t seed = 7;
   Config config = {};  // every knob but the mode
+  double motion_scale = 1.0;  // times the family's step motion
 };
 
 inline std::vector<StepResult> run_scene(const std::string& backend, const Scene& s) {
@@ -41,7 +42,7 @@ inline std::vector<StepResult> run_scene(const std::string& backend, const Scene
   std::vector<StepResult> results;
   for (size_t step = 0; step < s.steps; ++step) {
     for (size_t i = 0; i < s.pairs; ++i) {
-      if (step > 0) poses[i] = validation::moved(f, poses[i], f.step_motion(), s.seed, step * s.pairs + i);
+      if (step > 0) poses[i] = validation::moved(f, poses[i], s.motion_scale * f.step_motion(), s.seed, step * s.pairs + i);
       narrow->set_pose(pairs[i].a, poses[i].a);
       narrow->set_pose(pairs[i].b, poses[i].b);
     }

@@ -83,20 +83,26 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
 
 #ifdef RTCD_HAS_DOUBLE
 /* One job, before its items, made from its pair's setup (job j is
- * direction j % 2 of pair j / 2) as the host makes it: its
- * parameters (rtcd_make_params), its first item, and its frame from its
+ * direction j % 2 of pair j / 2) as the host makes it: its limits from the
+ * pair's motion, the configuration's limit settings and its shapes' scales
+ * (rtcd_derive_limits), its parameters (rtcd_make_params), its first item,
+ * and its frame from its
  * bodies' poses (rtcd_relative_frame); for a full job, the source items
  * (origins, then edges) of its near leaves, in item order, listed as its
  * items (the host counted them). */
 __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job_count, rtcd_uint config,
-                           __global const rtcd_device_shape* shapes, __global const rtcd_shape_traits* traits,
-                           __global const rtcd_box* bounds, __global const rtcd_uint* source_leaves,
+                           double displacement_threshold, double distance_extension, rtcd_uint max_walk_steps,
+                           rtcd_uint limits_set, __global const rtcd_device_shape* shapes,
+                           __global const rtcd_shape_traits* traits, __global const rtcd_box* bounds,
+                           __global const rtcd_shape_scale* scales, __global const rtcd_uint* source_leaves,
                            __global const rtcd_uint* near, __global const rtcd_pose* poses,
                            __global rtcd_device_job* jobs, __global rtcd_uint* first_items,
                            __global rtcd_frame* frames, __global rtcd_uint* vertices) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint v, n, count;
   rtcd_pair_setup pair;
+  rtcd_limit_settings settings;
+  rtcd_shape_scale scale_0, scale_1;
   rtcd_job_setup s;
   rtcd_device_job job;
   rtcd_shape_traits source_traits, target_traits;
@@ -106,7 +112,13 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   __global const rtcd_uint* leaves;
   if (j >= job_count) return;
   pair = setups[j / 2];
-  s = rtcd_direction_setup(&pair, j % 2);
+  settings.displacement_threshold = displacement_threshold;
+  settings.distance_extension = distance_extension;
+  settings.max_walk_steps = max_walk_steps;
+  settings.set = limits_set;
+  scale_0 = scales[pair.shapes[0]];
+  scale_1 = scales[pair.shapes[1]];
+  s = rtcd_direction_setup(&pair, j % 2, config, &settings, &scale_0, &scale_1);
   source_traits = traits[s.source];
   target_traits = traits[s.target];
   source_bounds = bounds[s.source];

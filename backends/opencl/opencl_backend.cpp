@@ -4,9 +4,10 @@
 // the device holding its tracked rays; the others go to the least loaded
 // by expected rays), each device with its own queue, and all devices run
 // at once:
-//   1. rtcd_prepare: each job made from its pair's 72-byte setup (both
-//      directions: parameters, first items) and its frame from its bodies'
-//      poses, by the host's own functions (kernel/job.h, kernel/frame.h),
+//   1. rtcd_prepare: each job made from its pair's 56-byte setup (both
+//      directions: limits from the pair's motion, parameters, first items)
+//      and its frame from its bodies' poses, by the host's own functions
+//      (kernel/limits.h, kernel/job.h, kernel/frame.h),
 //      then rtcd_select: every
 //      possible ray (source item: a vertex or an edge, or tracked ray)
 //      placed in the target's frame in double and flagged when it is a
@@ -46,6 +47,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstring>
 #include <iostream>
 #include <mutex>
 #include <utility>
@@ -65,7 +67,8 @@ static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && size
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
-static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 72 && alignof(rtcd_pair_setup) == 8 &&
+static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 56 && alignof(rtcd_pair_setup) == 8 &&
+              sizeof(rtcd_shape_scale) == 32 && sizeof(rtcd_limit_settings) == 24 &&
               sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
 
@@ -83,7 +86,7 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
-  kPrimitives, kOrigins, kDirections, kSourceLeaves, kBounds, kTraits
+  kPrimitives, kOrigins, kDirections, kSourceLeaves, kBounds, kTraits, kScales
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -205,10 +208,11 @@ class OpenClExecutor final : public RayExecutor {
 
   ~OpenClExecutor() override { settle(); }
 
-  void add_shape(std::shared_ptr<const Shape> shape) override {
-    if (fault_message_.empty()) data_.add(*shape, bvh_);
-    if (cpu_) cpu_->add_shape(shape);
+  void add_shape(std::shared_ptr<const Shape> shape, const ShapeScale& scale) override {
+    if (fault_message_.empty()) data_.add(*shape, scale, bvh_);
+    if (cpu_) cpu_->add_shape(shape, scale);
     shapes_.push_back(std::move(shape));
+    scales_.push_back(scale);
   }
 
   void begin_step(std::span<const rtcd_pose> poses) override {
@@ -224,6 +228,7 @@ class OpenClExecutor final : public RayExecutor {
 
   void configure(const Config& config) override {
     config_ = config;
+    limit_settings_ = limit_settings(config);
     if (cpu_) cpu_->configure(config);
   }
 
@@ -347,7 +352,7 @@ class OpenClExecutor final : public RayExecutor {
     if (!cpu_) {
       cpu_ = make_cpu_executor(fallback_.tracers());
       cpu_->configure(config_);
-      for (const auto& shape : shapes_) cpu_->add_shape(shape);
+      for (size_t i = 0; i < shapes_.size(); ++i) cpu_->add_shape(shapes_[i], scales_[i]);
     }
     return *cpu_;
   }
@@ -372,7 +377,7 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
                 upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves),
-                upload_once(data_.bounds),     upload_once(data_.traits)};
+                upload_once(data_.bounds),     upload_once(data_.traits),     upload_once(data_.scales)};
     d.shapes_uploaded = data_.table.size();
   }
 
@@ -538,7 +543,7 @@ class OpenClExecutor final : public RayExecutor {
       setup.item_count = dj.item_count;
       setup.first_tracked = dj.first_tracked;
       setup.first_near = dj.first_near;
-      add_direction(lane, setup);
+      add_direction(lane, job, setup);
     } else {
       lane.host_frames.push_back(make_frame(job));
     }
@@ -552,31 +557,28 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // A job's setup into its pair's: the first of a lane's two jobs of a
-  // pair (assign adds them one after the other) opens it; the second must
-  // be the same pair the other way, its items following the first's.
-  static void add_direction(Lane& lane, const rtcd_job_setup& s) {
+  // pair (assign adds them one after the other) opens it, the second adds
+  // its side. Either must be what the device makes of the pair's
+  // (rtcd_direction_setup), limits derived from the motion included.
+  void add_direction(Lane& lane, const RayJob& job, const rtcd_job_setup& s) const {
     const uint32_t d = (lane.batch_jobs.size() - 1) % 2;
     const rtcd_uint first = s.flags & RTCD_JOB_ITERATIVE ? s.first_tracked : s.first_near;
     const rtcd_uint edges = s.flags & RTCD_JOB_EDGES ? RTCD_PAIR_EDGES(d) : 0u;
     if (d == 0) {
-      rtcd_pair_setup& p = lane.host_setups.emplace_back();
-      p = {s.extension,     s.reach,
-           s.moved,         {s.source_body, s.target_body},
-           {s.source, s.target}, s.max_walk_steps,
-           (s.flags & RTCD_JOB_ITERATIVE) | edges, s.first_item,
-           {s.item_count, 0},   {first, 0},
-           0};
-      return;
+      lane.host_setups.push_back({job.motion, s.moved, {s.source_body, s.target_body}, {s.source, s.target},
+                                  (s.flags & RTCD_JOB_ITERATIVE) | edges, s.first_item, {s.item_count, 0}, {first, 0}});
+    } else {
+      rtcd_pair_setup& p = lane.host_setups.back();
+      p.flags |= edges;
+      p.item_count[1] = s.item_count;
+      p.first[1] = first;
     }
-    rtcd_pair_setup& p = lane.host_setups.back();
-    if (s.source_body != p.bodies[1] || s.target_body != p.bodies[0] || s.source != p.shapes[1] ||
-        s.target != p.shapes[0] || s.extension != p.extension || s.reach != p.reach || s.moved != p.moved ||
-        s.max_walk_steps != p.max_walk_steps || (s.flags & RTCD_JOB_ITERATIVE) != (p.flags & RTCD_JOB_ITERATIVE) ||
-        s.first_item != p.first_item + p.item_count[0])
-      throw Error("a batch's jobs 2i and 2i + 1 are not one pair's two directions");
-    p.flags |= edges;
-    p.item_count[1] = s.item_count;
-    p.first[1] = first;
+    const rtcd_pair_setup& p = lane.host_setups.back();
+    const rtcd_job_setup made = rtcd_direction_setup(&p, d, config_flags(config_), &limit_settings_,
+                                                     &data_.scales[p.shapes[0]], &data_.scales[p.shapes[1]]);
+    if (job.motion != p.motion || std::memcmp(&made, &s, sizeof(s)) != 0)
+      throw Error("a pair's setup does not make its job " + std::to_string(lane.batch_jobs.back()) +
+                  " (jobs 2i and 2i + 1 must be one pair's two directions, their limits derived from its motion)");
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves) appended
@@ -799,8 +801,10 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.near, 1);  // unread by walks
     if (!lane.host_jobs.front().params.iterative) write(d, lane.near, lane.host_near);
     cl::Kernel& p = d.prepare;
-    set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), d.shapes[kTable], d.shapes[kTraits],
-             d.shapes[kBounds], d.shapes[kSourceLeaves], lane.near.buffer, d.poses.buffer, lane.jobs.buffer,
+    const rtcd_limit_settings& l = limit_settings_;
+    set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
+             l.distance_extension, l.max_walk_steps, l.set, d.shapes[kTable], d.shapes[kTraits], d.shapes[kBounds],
+             d.shapes[kScales], d.shapes[kSourceLeaves], lane.near.buffer, d.poses.buffer, lane.jobs.buffer,
              lane.first_items.buffer, lane.frames.buffer, lane.vertices.buffer);
     launch(d, p, jobs_count);
     if (grid(lane)) return;
@@ -1086,10 +1090,12 @@ class OpenClExecutor final : public RayExecutor {
   CpuFallback fallback_;
   std::string fault_message_;  // set once the devices are given up
   std::vector<std::shared_ptr<const Shape>> shapes_;
+  std::vector<ShapeScale> scales_;
   ShapeData data_;
   std::vector<Device> devices_;
   std::unique_ptr<RayExecutor> cpu_;
   Config config_;
+  rtcd_limit_settings limit_settings_{};
   uint64_t batches_ = 0;  // batches with rays
   uint64_t step_ = 0;     // begin_step calls
   std::span<const rtcd_pose> poses_;  // the step's (begin_step)

@@ -5,7 +5,7 @@
 
 namespace rtcd::opencl {
 
-void ShapeData::add(const Shape& shape, bool bvh) {
+void ShapeData::add(const Shape& shape, const ShapeScale& scale, bool bvh) {
   rtcd_device_shape d{};
   d.first_vertex = rtcd_uint(positions.size());
   d.first_triangle = rtcd_uint(triangles.size() / 3);
@@ -59,6 +59,7 @@ void ShapeData::add(const Shape& shape, bool bvh) {
   table.push_back(d);
   bounds.push_back(to_kernel(shape.bounds()));
   traits.push_back(shape_traits(shape));
+  scales.push_back(to_kernel(scale));
 }
 
 }  // namespace rtcd::opencl

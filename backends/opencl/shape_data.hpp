@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "device_types.h"
+#include "rtcd/limits.hpp"
 #include "rtcd/shape.hpp"
 
 namespace rtcd::opencl {
@@ -14,6 +15,7 @@ struct ShapeData {
   std::vector<rtcd_device_shape> table;
   std::vector<rtcd_box> bounds;  // per shape, in double: the frames' candidate boxes
   std::vector<rtcd_shape_traits> traits;  // per shape: what its jobs' parameters read
+  std::vector<rtcd_shape_scale> scales;   // per shape: what its pairs' limits read
   std::vector<rtcd_vec3> positions, normals, origins, directions;
   std::vector<rtcd_uint> source_leaves;  // per origin: its leaf's node in the shape's source tree
   // Fold guards: ring_first rebased into the one ring list, with a
@@ -34,7 +36,7 @@ struct ShapeData {
   }
 
   // Appends the shape's data (its BVH too when `bvh`) and its table entry.
-  void add(const Shape& shape, bool bvh);
+  void add(const Shape& shape, const ShapeScale& scale, bool bvh);
 };
 
 }  // namespace rtcd::opencl

@@ -94,7 +94,7 @@ class CpuExecutor final : public RayExecutor {
  public:
   explicit CpuExecutor(std::unique_ptr<MeshTracerFactory> tracers) : factory_(std::move(tracers)) {}
 
-  void add_shape(std::shared_ptr<const Shape> shape) override {
+  void add_shape(std::shared_ptr<const Shape> shape, const ShapeScale&) override {
     const Mesh* mesh = shape->mesh();
     tracers_.push_back(mesh ? factory_->build(*mesh) : nullptr);
     shapes_.push_back(std::move(shape));
@@ -279,7 +279,7 @@ rtcd_uint config_flags(const Config& config) {
   return (config.predictive ? RTCD_CONFIG_PREDICTIVE : 0u) |
          (config.predictive && config.mode != Mode::full ? RTCD_CONFIG_WATCH : 0u) |
          (config.verify_walks ? RTCD_CONFIG_VERIFY : 0u) | (config.edge_contacts ? RTCD_CONFIG_EDGES : 0u) |
-         (config.nearest_surface ? RTCD_CONFIG_NEAREST : 0u);
+         (config.nearest_surface ? RTCD_CONFIG_NEAREST : 0u) | (config.mode == Mode::automatic ? RTCD_CONFIG_AUTOMATIC : 0u);
 }
 
 rtcd_job_setup job_setup(const RayJob& job, const Config& config) {

@@ -67,23 +67,30 @@ ShapeScale measure_scale(const Shape& shape) {
   return scale;
 }
 
-PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeScale& b, double motion) {
-  const double size = a.radius <= 0.0 ? b.radius : b.radius <= 0.0 ? a.radius : std::min(a.radius, b.radius);
-  const double thickness = std::min({a.thickness, b.thickness, 2.0 * size});
-  PairLimits l;
-  l.distance_extension = config.distance_extension.value_or(std::max(resting_extension(size), std::min(2.0 * motion, size)));
-  l.displacement_threshold = config.displacement_threshold.value_or(std::min(l.distance_extension / 2.0, thickness / 4.0));
-  if (!config.distance_extension) l.distance_extension = std::max(l.distance_extension, l.displacement_threshold);
-  if (config.max_walk_steps) {
-    l.max_walk_steps = *config.max_walk_steps;
-  } else {
-    const double edge = std::min(a.edge, b.edge);
-    const double reach = 4.0 * std::max(2.0 * motion, l.displacement_threshold);
-    const double steps = std::isfinite(edge) && edge > 0.0 ? std::ceil(reach / edge) : 0.0;
-    const double most = std::max(32.0, double(std::max(a.triangles, b.triangles)));
-    l.max_walk_steps = uint32_t(std::clamp(steps, 32.0, std::min(most, 1'000'000.0)));
+rtcd_shape_scale to_kernel(const ShapeScale& s) { return {s.radius, s.thickness, s.edge, s.triangles, 0}; }
+
+rtcd_limit_settings limit_settings(const Config& config) {
+  rtcd_limit_settings c{};
+  if (config.displacement_threshold) {
+    c.displacement_threshold = *config.displacement_threshold;
+    c.set |= RTCD_LIMIT_THRESHOLD;
   }
-  return l;
+  if (config.distance_extension) {
+    c.distance_extension = *config.distance_extension;
+    c.set |= RTCD_LIMIT_EXTENSION;
+  }
+  if (config.max_walk_steps) {
+    c.max_walk_steps = *config.max_walk_steps;
+    c.set |= RTCD_LIMIT_WALK;
+  }
+  return c;
+}
+
+PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeScale& b, double motion) {
+  const rtcd_limit_settings settings = limit_settings(config);
+  const rtcd_shape_scale sa = to_kernel(a), sb = to_kernel(b);
+  const rtcd_pair_limits l = rtcd_derive_limits(&settings, &sa, &sb, motion);
+  return {l.displacement_threshold, l.distance_extension, l.max_walk_steps};
 }
 
 }  // namespace rtcd

@@ -162,8 +162,9 @@ class PipelineNarrowPhase final : public NarrowPhase {
   ShapeId add_shape(std::shared_ptr<const Shape> shape) override {
     idle("add_shape");
     if (!shape) throw UsageError("add_shape: null shape");
-    in_arena([&] { executor_->add_shape(shape); });
-    shapes_.emplace_back(std::move(shape), derive_);
+    ShapeEntry entry(std::move(shape), derive_);
+    in_arena([&] { executor_->add_shape(entry.shape, entry.scale); });
+    shapes_.push_back(std::move(entry));
     return ShapeId(shapes_.size() - 1);
   }
 
@@ -506,6 +507,7 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
       job.edges = edges == kAnyBody || edges == source;
       job.limits = w.limits;
       job.moved = iterative ? w.moved : 0.0;
+      job.motion = w.step_motion;
       job.residence = &w.state->residence[direction(source, target)];
       job.tracked =
           iterative ? walked(*w.state, direction(source, target), w.hold_edges) : std::span<const RayOutcome>{};

@@ -136,10 +136,11 @@ TEST(OpenClScans, TotalsAreTheHostsSumsAroundGroupMultiples) {
   }
 }
 
-// Random pair setups, shapes, poses far from the origin and configurations:
-// the jobs, first items and frames rtcd_prepare makes are those the host's
-// rtcd_make_params and rtcd_relative_frame make from each direction's setup,
-// bit for bit, and the frame
+// Random pair setups, shapes, scales, poses far from the origin,
+// configurations and limit settings: the jobs, first items and frames
+// rtcd_prepare makes are those the host's rtcd_derive_limits,
+// rtcd_make_params and rtcd_relative_frame make from each direction's
+// setup, bit for bit, and the frame
 // is the transform target⁻¹ ∘ source (Eigen's, to rounding).
 TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   const auto rt = runtime();
@@ -165,12 +166,19 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     const rtcd_int kind = rtcd_int(i % 4);  // mesh, sphere, box, half-space
     traits[i] = {kind, rtcd_int(bit(g)), word(g), kind == RTCD_TARGET_SPHERE ? float(size(g)) : 0.0f};
   }
+  // Scales as measure_scale gives them: a half-space has no radius, and
+  // only meshes an edge length.
+  std::vector<rtcd_shape_scale> scales(kShapes);
+  for (size_t i = 0; i < kShapes; ++i) {
+    const bool half_space = traits[i].kind == RTCD_TARGET_HALFSPACE, mesh = traits[i].kind == RTCD_TARGET_MESH;
+    scales[i] = {half_space ? 0.0 : size(g), half_space ? INFINITY : size(g) / 3, mesh ? size(g) / 50 : INFINITY,
+                 mesh ? word(g) : 0u, 0u};
+  }
   std::vector<rtcd_pair_setup> pairs(kJobs / 2);
   std::uniform_int_distribution<rtcd_uint> body(0, kBodies - 1), shape(0, kShapes - 1);
   for (size_t i = 0; i < pairs.size(); ++i) {
     rtcd_pair_setup& p = pairs[i];
-    p.extension = size(g) / 10;
-    p.reach = size(g) / 20;
+    p.motion = i % 5 == 0 ? 0.0 : size(g) / 5;
     p.moved = size(g) / 30;
     p.bodies[0] = body(g);
     p.bodies[1] = body(g);
@@ -181,7 +189,6 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     }
     p.shapes[0] = shape(g);
     p.shapes[1] = shape(g);
-    p.max_walk_steps = word(g);
     // Walks: nothing to list, the jobs and frames alone.
     p.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_PAIR_EDGES(0) : 0u) | (bit(g) ? RTCD_PAIR_EDGES(1) : 0u);
     p.first_item = rtcd_uint(i) * 3000;
@@ -190,40 +197,55 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     p.first[0] = word(g);
     p.first[1] = word(g);
   }
-  // Job j is direction j % 2 of pair j / 2: the first body's rays at the
-  // second, then the other way, its items after the first's.
-  std::vector<rtcd_job_setup> setups(kJobs);
-  for (size_t j = 0; j < kJobs; ++j) {
-    const rtcd_pair_setup& p = pairs[j / 2];
-    const rtcd_uint d = j % 2;
-    rtcd_job_setup& s = setups[j] = rtcd_direction_setup(&p, d);
-    ASSERT_EQ(s.source_body, p.bodies[d]);
-    ASSERT_EQ(s.target_body, p.bodies[1 - d]);
-    ASSERT_EQ(s.target, p.shapes[1 - d]);
-    ASSERT_EQ(s.first_item, d == 0 ? p.first_item : p.first_item + p.item_count[0]);
-    ASSERT_EQ(s.first_tracked, p.first[d]);
-    ASSERT_EQ((s.flags & RTCD_JOB_EDGES) != 0, (p.flags & RTCD_PAIR_EDGES(d)) != 0);
-  }
   std::vector<rtcd_device_shape> table(kShapes);
   std::vector<rtcd_uint> unused(1), first_items(kJobs);
   std::vector<rtcd_device_job> jobs(kJobs);
   std::vector<rtcd_frame> frames(kJobs);
+  std::vector<rtcd_job_setup> setups(kJobs);
   // Buffers outlive the kernel's use: setting an argument does not retain one.
   const cl::Buffer setups_buffer = buffer_of(*rt, pairs), jobs_buffer = buffer_of(*rt, jobs),
                    firsts_buffer = buffer_of(*rt, first_items), frames_buffer = buffer_of(*rt, frames);
   cl::Kernel k(rt->program, "rtcd_prepare");
   cl::CommandQueue queue(rt->context, rt->devices.front());
   size_t boxes = 0;
-  for (const rtcd_uint config : {0u, 31u, RTCD_CONFIG_PREDICTIVE | RTCD_CONFIG_EDGES, RTCD_CONFIG_VERIFY}) {
-    SCOPED_TRACE("configuration " + std::to_string(config));
+  // Configurations and limit settings: every limit derived, every one set, and mixes.
+  const std::pair<rtcd_uint, rtcd_limit_settings> cases[] = {
+      {0u, {0.0, 0.0, 0u, 0u}},
+      {63u, {0.01, 0.1, 40u, RTCD_LIMIT_THRESHOLD | RTCD_LIMIT_EXTENSION | RTCD_LIMIT_WALK}},
+      {RTCD_CONFIG_PREDICTIVE | RTCD_CONFIG_EDGES | RTCD_CONFIG_AUTOMATIC, {0.0, 0.05, 0u, RTCD_LIMIT_EXTENSION}},
+      {RTCD_CONFIG_VERIFY, {0.02, 0.0, 100u, RTCD_LIMIT_THRESHOLD | RTCD_LIMIT_WALK}}};
+  for (const auto& [config, settings] : cases) {
+    SCOPED_TRACE("configuration " + std::to_string(config) + ", limits set " + std::to_string(settings.set));
+    // Job j is direction j % 2 of pair j / 2: the first body's rays at the
+    // second, then the other way, its items after the first's.
+    for (size_t j = 0; j < kJobs; ++j) {
+      const rtcd_pair_setup& p = pairs[j / 2];
+      const rtcd_uint d = j % 2;
+      rtcd_job_setup& s = setups[j] =
+          rtcd_direction_setup(&p, d, config, &settings, &scales[p.shapes[0]], &scales[p.shapes[1]]);
+      ASSERT_EQ(s.source_body, p.bodies[d]);
+      ASSERT_EQ(s.target_body, p.bodies[1 - d]);
+      ASSERT_EQ(s.target, p.shapes[1 - d]);
+      ASSERT_EQ(s.first_item, d == 0 ? p.first_item : p.first_item + p.item_count[0]);
+      ASSERT_EQ(s.first_tracked, p.first[d]);
+      ASSERT_EQ((s.flags & RTCD_JOB_EDGES) != 0, (p.flags & RTCD_PAIR_EDGES(d)) != 0);
+      const rtcd_pair_limits l = rtcd_derive_limits(&settings, &scales[p.shapes[1]], &scales[p.shapes[0]], p.motion);
+      ASSERT_EQ(s.extension, l.distance_extension) << "the rules are symmetric";
+      ASSERT_EQ(s.reach, config & RTCD_CONFIG_AUTOMATIC ? l.displacement_threshold : l.distance_extension);
+      ASSERT_EQ(s.max_walk_steps, l.max_walk_steps);
+    }
     k.setArg(0, setups_buffer);
     k.setArg(1, rtcd_uint(kJobs));
     k.setArg(2, config);
+    k.setArg(3, settings.displacement_threshold);
+    k.setArg(4, settings.distance_extension);
+    k.setArg(5, settings.max_walk_steps);
+    k.setArg(6, settings.set);
     const cl::Buffer args[] = {buffer_of(*rt, table),  buffer_of(*rt, traits), buffer_of(*rt, bounds),
-                               buffer_of(*rt, unused), buffer_of(*rt, unused), buffer_of(*rt, poses),
-                               jobs_buffer,            firsts_buffer,          frames_buffer,
-                               buffer_of(*rt, unused)};
-    for (cl_uint i = 0; i < 10; ++i) k.setArg(i + 3, args[i]);
+                               buffer_of(*rt, scales), buffer_of(*rt, unused), buffer_of(*rt, unused),
+                               buffer_of(*rt, poses),  jobs_buffer,            firsts_buffer,
+                               frames_buffer,          buffer_of(*rt, unused)};
+    for (cl_uint i = 0; i < 11; ++i) k.setArg(i + 7, args[i]);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((kJobs + kGroupSize - 1) / kGroupSize * kGroupSize),
                                cl::NDRange(kGroupSize));
     queue.finish();

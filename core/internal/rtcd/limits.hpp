@@ -33,6 +33,7 @@
 #include <limits>
 
 #include "rtcd/config.hpp"
+#include "rtcd/kernel/limits.h"
 #include "rtcd/shape.hpp"
 
 namespace rtcd {
@@ -65,8 +66,12 @@ struct ShapeScale {
 
 ShapeScale measure_scale(const Shape& shape);
 
-// The rules above; `motion` is m.
+// The rules above (kernel/limits.h, rtcd_derive_limits); `motion` is m.
 PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeScale& b, double motion);
+
+// The rules' inputs as a device reads them.
+rtcd_shape_scale to_kernel(const ShapeScale& scale);
+rtcd_limit_settings limit_settings(const Config& config);
 
 // Whether any limit is left to the rules (only then are scales and motions needed).
 inline bool derives_limits(const Config& config) {

@@ -65,6 +65,9 @@ struct RayJob {
   // to the target since the pair's last full step (equation 2.1); a watched
   // edge farther from the surface than this needs no test yet.
   double moved = 0.0;
+  // The pair's motion in the last step, from which its limits were derived
+  // (derive_limits' m; 0 when the Config sets every limit).
+  double motion = 0.0;
   // Iterative jobs: last step's kept outcomes, the walks' start triangles.
   std::span<const RayOutcome> tracked;
   // The pair-direction's note for the executor, read and written by it;
@@ -136,8 +139,10 @@ class RayExecutor {
   // Called once, before anything else: the configuration every batch runs
   // with (the per-pair limits come with each job).
   virtual void configure(const Config& config) = 0;
-  // Called once per shape, in ShapeId order, before any job names it.
-  virtual void add_shape(std::shared_ptr<const Shape> shape) = 0;
+  // Called once per shape, in ShapeId order, before any job names it, with
+  // its scale (measured only when some limit is derived), for an executor
+  // that derives the jobs' limits where it runs them (rtcd_derive_limits).
+  virtual void add_shape(std::shared_ptr<const Shape> shape, const ShapeScale& scale) = 0;
   // Called before each step's batches: a residence is good for the step
   // after the one that wrote it. `poses`: every body's pose by BodyId, the
   // step's, for an executor that makes the jobs' frames where it runs them

@@ -6,6 +6,7 @@
 #ifndef RTCD_KERNEL_JOB_H
 #define RTCD_KERNEL_JOB_H
 
+#include "limits.h"
 #include "tracer.h"
 
 /* rtcd_job_setup::flags */
@@ -18,6 +19,7 @@
 #define RTCD_CONFIG_VERIFY 4u     /* Config::verify_walks */
 #define RTCD_CONFIG_EDGES 8u      /* Config::edge_contacts */
 #define RTCD_CONFIG_NEAREST 16u   /* Config::nearest_surface */
+#define RTCD_CONFIG_AUTOMATIC 32u /* Mode::automatic: vertices are watched within the displacement threshold */
 
 /* What a shape brings to the parameters of the jobs it is in. */
 typedef struct {
@@ -61,34 +63,37 @@ typedef struct {
 
 /* One pair as the host decided it, both directions in one: direction 0
  * casts the first body's rays against the second, direction 1 the
- * second's against the first. The directions share the limits, the motion
- * and the mode, and their items follow one another. 72 bytes. */
+ * second's against the first. The directions share the motion, the limits
+ * (derived from the motion on the device) and the mode, and their items
+ * follow one another. 56 bytes. */
 typedef struct {
-  double extension;
-  double reach;
-  double moved;
+  double motion; /* in the last step: the m of the limits' rules (rtcd_derive_limits) */
+  double moved;  /* iterative pairs: since the pair's full step (equation 2.1) */
   rtcd_uint bodies[2];
   rtcd_uint shapes[2];
-  rtcd_uint max_walk_steps;
   rtcd_uint flags;      /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d) */
   rtcd_uint first_item; /* direction 0's */
   rtcd_uint item_count[2];
   rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its near leaves */
-  rtcd_uint unused;
 } rtcd_pair_setup;
 
-/* Direction d's setup. */
-RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_uint d) {
+/* Direction d's setup, with the pair's limits derived from its motion, the
+ * settings and its shapes' scales (shapes[0]'s, shapes[1]'s: the rules are
+ * symmetric). */
+RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_uint d, rtcd_uint config,
+                                                const rtcd_limit_settings* settings,
+                                                const rtcd_shape_scale* scale_0, const rtcd_shape_scale* scale_1) {
   rtcd_job_setup s;
   const int iterative = (p->flags & RTCD_JOB_ITERATIVE) != 0;
-  s.extension = p->extension;
-  s.reach = p->reach;
+  const rtcd_pair_limits limits = rtcd_derive_limits(settings, scale_0, scale_1, p->motion);
+  s.extension = limits.distance_extension;
+  s.reach = (config & RTCD_CONFIG_AUTOMATIC) ? limits.displacement_threshold : limits.distance_extension;
   s.moved = p->moved;
   s.source_body = p->bodies[d];
   s.target_body = p->bodies[1 - d];
   s.source = p->shapes[d];
   s.target = p->shapes[1 - d];
-  s.max_walk_steps = p->max_walk_steps;
+  s.max_walk_steps = limits.max_walk_steps;
   s.flags = (p->flags & RTCD_JOB_ITERATIVE) | ((p->flags & RTCD_PAIR_EDGES(d)) ? RTCD_JOB_EDGES : 0u);
   s.first_item = p->first_item + (d ? p->item_count[0] : 0u);
   s.item_count = p->item_count[d];
