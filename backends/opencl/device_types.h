@@ -19,8 +19,9 @@ typedef struct {
   rtcd_uint node_count;
   rtcd_uint first_wide;      /* the BVH's wide nodes */
   rtcd_uint first_primitive; /* the BVH's triangle list */
-  rtcd_uint first_source;    /* ray origins and directions */
+  rtcd_uint first_source;    /* ray origins and directions, the items' leaves, the leaves' items */
   rtcd_uint source_count;
+  rtcd_uint first_source_node; /* the source tree's nodes' item ranges */
   float radius;             /* sphere */
   rtcd_vec3 half_extents;   /* box */
 } rtcd_device_shape;

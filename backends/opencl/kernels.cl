@@ -81,6 +81,39 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
   return lo;
 }
 
+/* Lists of near leaves this long or shorter are merged (rtcd_merge_leaves). */
+#define RTCD_NEAR_MERGE 32u
+
+/* The items of a list of at most RTCD_NEAR_MERGE leaves, `count` in all,
+ * in increasing order: a merge of the leaves' item lists (each in order,
+ * `ranges` of `items`), the least head next. */
+RTCD_INLINE void rtcd_merge_leaves(__global const rtcd_uint* near, __global const rtcd_uint* items,
+                                   __global const rtcd_uint* ranges, __global rtcd_uint* out, rtcd_uint count) {
+  rtcd_uint at[RTCD_NEAR_MERGE], end[RTCD_NEAR_MERGE], head[RTCD_NEAR_MERGE];
+  rtcd_uint runs = 0, r, n;
+  for (r = 0; r < near[0]; ++r) {
+    const rtcd_uint leaf = near[1 + r];
+    at[runs] = ranges[2 * leaf];
+    end[runs] = ranges[2 * leaf + 1];
+    if (at[runs] == end[runs]) continue;
+    head[runs] = items[at[runs]];
+    ++runs;
+  }
+  for (n = 0; n < count && runs > 0; ++n) {
+    rtcd_uint least = 0;
+    for (r = 1; r < runs; ++r) least = head[r] < head[least] ? r : least;
+    out[n] = head[least];
+    if (++at[least] < end[least]) {
+      head[least] = items[at[least]];
+    } else { /* the last run takes its place */
+      --runs;
+      at[least] = at[runs];
+      end[least] = end[runs];
+      head[least] = head[runs];
+    }
+  }
+}
+
 #ifdef RTCD_HAS_DOUBLE
 /* One job, before its items, made from its pair's setup (job j is
  * direction j % 2 of pair j / 2) as the host makes it: its limits from the
@@ -89,12 +122,14 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
  * and its frame from its
  * bodies' poses (rtcd_relative_frame); for a full job, the source items
  * (origins, then edges) of its near leaves, in item order, listed as its
- * items (the host counted them). */
+ * items (the host counted them): a short list of leaves by merging their
+ * items (each leaf's in order), bits by testing every item. */
 __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job_count, rtcd_uint config,
                            double displacement_threshold, double distance_extension, rtcd_uint max_walk_steps,
                            rtcd_uint limits_set, __global const rtcd_device_shape* shapes,
                            __global const rtcd_shape_traits* traits, __global const rtcd_box* bounds,
                            __global const rtcd_shape_scale* scales, __global const rtcd_uint* source_leaves,
+                           __global const rtcd_uint* leaf_items, __global const rtcd_uint* source_ranges,
                            __global const rtcd_uint* near, __global const rtcd_pose* poses,
                            __global rtcd_device_job* jobs, __global rtcd_uint* first_items,
                            __global rtcd_frame* frames, __global rtcd_uint* vertices) {
@@ -131,11 +166,18 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   rtcd_relative_frame(&source, &target, &source_bounds, &target_bounds, s.extension, &frame);
   frames[j] = frame;
   if (job.params.iterative || job.item_count == 0) return;
+  near += job.first_near;
+  if (near[0] <= RTCD_NEAR_MERGE) {
+    rtcd_merge_leaves(near, leaf_items + shapes[job.source].first_source,
+                      source_ranges + 2 * shapes[job.source].first_source_node, vertices + job.first_item,
+                      job.item_count);
+    return;
+  }
   leaves = source_leaves + shapes[job.source].first_source;
   count = shapes[job.source].source_count;
   n = job.first_item;
   for (v = 0; v < count; ++v)
-    if (rtcd_near_leaf(near + job.first_near, leaves[v])) vertices[n++] = v;
+    if (rtcd_near_leaf(near, leaves[v])) vertices[n++] = v;
 }
 
 /* Item i: the possible ray placed in the target's frame (rtcd_place_ray, in

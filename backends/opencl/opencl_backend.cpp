@@ -64,7 +64,7 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // The kernels read the buffers with OpenCL C's layout of the same structs:
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
 static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
-static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 56 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 60 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
 static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 56 && alignof(rtcd_pair_setup) == 8 &&
@@ -86,7 +86,7 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
-  kPrimitives, kOrigins, kDirections, kSourceLeaves, kBounds, kTraits, kScales
+  kPrimitives, kOrigins, kDirections, kSourceLeaves, kLeafItems, kSourceRanges, kBounds, kTraits, kScales
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -377,6 +377,7 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
                 upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves),
+                upload_once(data_.leaf_items), upload_once(data_.source_ranges),
                 upload_once(data_.bounds),     upload_once(data_.traits),     upload_once(data_.scales)};
     d.shapes_uploaded = data_.table.size();
   }
@@ -804,7 +805,7 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
              l.distance_extension, l.max_walk_steps, l.set, d.shapes[kTable], d.shapes[kTraits], d.shapes[kBounds],
-             d.shapes[kScales], d.shapes[kSourceLeaves], lane.near.buffer, d.poses.buffer, lane.jobs.buffer,
+             d.shapes[kScales], d.shapes[kSourceLeaves], d.shapes[kLeafItems], d.shapes[kSourceRanges], lane.near.buffer, d.poses.buffer, lane.jobs.buffer,
              lane.first_items.buffer, lane.frames.buffer, lane.vertices.buffer);
     launch(d, p, jobs_count);
     if (grid(lane)) return;

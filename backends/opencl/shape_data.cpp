@@ -1,7 +1,10 @@
 #include "shape_data.hpp"
 
+#include <algorithm>
+
 #include "bvh.hpp"
 #include "rtcd/cpu_executor.hpp"
+#include "rtcd/error.hpp"
 
 namespace rtcd::opencl {
 
@@ -22,9 +25,16 @@ void ShapeData::add(const Shape& shape, const ShapeScale& scale, bool bvh) {
     directions.push_back(rtcd_v3(dir.x(), dir.y(), dir.z()));
   }
   source_leaves.resize(origins.size(), 0);
-  for (uint32_t n = 0; n < rs.nodes.size(); ++n)
-    if (rs.nodes[n].child == 0)
-      for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = n;
+  if (rs.order.size() != rs.item_count()) throw Error("a shape's ray sources are not indexed (RaySources::index)");
+  d.first_source_node = rtcd_uint(source_ranges.size() / 2);
+  leaf_items.insert(leaf_items.end(), rs.order.begin(), rs.order.end());
+  for (uint32_t n = 0; n < rs.nodes.size(); ++n) {
+    const RaySources::Node& node = rs.nodes[n];
+    source_ranges.insert(source_ranges.end(), {node.begin, node.end});
+    if (node.child != 0) continue;
+    for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = n;
+    std::sort(leaf_items.begin() + d.first_source + node.begin, leaf_items.begin() + d.first_source + node.end);
+  }
   if (const Mesh* mesh = shape.mesh()) {
     d.kind = RTCD_TARGET_MESH;
     d.triangle_count = rtcd_uint(mesh->triangle_count());

@@ -243,9 +243,10 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     k.setArg(6, settings.set);
     const cl::Buffer args[] = {buffer_of(*rt, table),  buffer_of(*rt, traits), buffer_of(*rt, bounds),
                                buffer_of(*rt, scales), buffer_of(*rt, unused), buffer_of(*rt, unused),
+                               buffer_of(*rt, unused), buffer_of(*rt, unused),
                                buffer_of(*rt, poses),  jobs_buffer,            firsts_buffer,
                                frames_buffer,          buffer_of(*rt, unused)};
-    for (cl_uint i = 0; i < 11; ++i) k.setArg(i + 7, args[i]);
+    for (cl_uint i = 0; i < 13; ++i) k.setArg(i + 7, args[i]);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((kJobs + kGroupSize - 1) / kGroupSize * kGroupSize),
                                cl::NDRange(kGroupSize));
     queue.finish();
