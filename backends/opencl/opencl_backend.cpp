@@ -67,7 +67,7 @@ static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && size
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 60 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
-static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 56 && alignof(rtcd_pair_setup) == 8 &&
+static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 48 && alignof(rtcd_pair_setup) == 8 &&
               sizeof(rtcd_shape_scale) == 32 && sizeof(rtcd_limit_settings) == 24 &&
               sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
@@ -138,6 +138,8 @@ struct Device {
   size_t shapes_uploaded = 0;
   GrowingBuffer poses;         // every body's, the step's (rtcd_pose)
   uint64_t poses_written = 0;  // the step they are
+  GrowingBuffer body_shapes;   // every body's shape, by BodyId
+  size_t body_shapes_written = 0;
   // Tracked rays that stay on the device, by step parity: the step's
   // batches append what they keep to one (rtcd_lay_out) while its walks read
   // the other, written the step before, with the rays that came from
@@ -214,6 +216,8 @@ class OpenClExecutor final : public RayExecutor {
     shapes_.push_back(std::move(shape));
     scales_.push_back(scale);
   }
+
+  void add_body(ShapeId shape) override { body_shapes_.push_back(shape); }
 
   void begin_step(std::span<const rtcd_pose> poses) override {
     ++step_;
@@ -566,7 +570,7 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_uint first = s.flags & RTCD_JOB_ITERATIVE ? s.first_tracked : s.first_near;
     const rtcd_uint edges = s.flags & RTCD_JOB_EDGES ? RTCD_PAIR_EDGES(d) : 0u;
     if (d == 0) {
-      lane.host_setups.push_back({job.motion, s.moved, {s.source_body, s.target_body}, {s.source, s.target},
+      lane.host_setups.push_back({job.motion, s.moved, {s.source_body, s.target_body},
                                   (s.flags & RTCD_JOB_ITERATIVE) | edges, s.first_item, {s.item_count, 0}, {first, 0}});
     } else {
       rtcd_pair_setup& p = lane.host_setups.back();
@@ -575,8 +579,9 @@ class OpenClExecutor final : public RayExecutor {
       p.first[1] = first;
     }
     const rtcd_pair_setup& p = lane.host_setups.back();
-    const rtcd_job_setup made = rtcd_direction_setup(&p, d, config_flags(config_), &limit_settings_,
-                                                     &data_.scales[p.shapes[0]], &data_.scales[p.shapes[1]]);
+    const rtcd_uint shape_0 = body_shapes_.at(p.bodies[0]), shape_1 = body_shapes_.at(p.bodies[1]);
+    const rtcd_job_setup made = rtcd_direction_setup(&p, d, config_flags(config_), &limit_settings_, shape_0,
+                                                     shape_1, &data_.scales[shape_0], &data_.scales[shape_1]);
     if (job.motion != p.motion || std::memcmp(&made, &s, sizeof(s)) != 0)
       throw Error("a pair's setup does not make its job " + std::to_string(lane.batch_jobs.back()) +
                   " (jobs 2i and 2i + 1 must be one pair's two directions, their limits derived from its motion)");
@@ -787,6 +792,10 @@ class OpenClExecutor final : public RayExecutor {
       write(d, d.poses, poses_);
       d.poses_written = step_;
     }
+    if (d.body_shapes_written != body_shapes_.size()) {  // bodies were added
+      write(d, d.body_shapes, body_shapes_);
+      d.body_shapes_written = body_shapes_.size();
+    }
     write(d, lane.setups, lane.host_setups);
     reserve(lane.jobs, jobs_count * sizeof(rtcd_device_job));
     reserve(lane.first_items, jobs_count * sizeof(rtcd_uint));
@@ -805,8 +814,9 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
              l.distance_extension, l.max_walk_steps, l.set, d.shapes[kTable], d.shapes[kTraits], d.shapes[kBounds],
-             d.shapes[kScales], d.shapes[kSourceLeaves], d.shapes[kLeafItems], d.shapes[kSourceRanges], lane.near.buffer, d.poses.buffer, lane.jobs.buffer,
-             lane.first_items.buffer, lane.frames.buffer, lane.vertices.buffer);
+             d.shapes[kScales], d.shapes[kSourceLeaves], d.shapes[kLeafItems], d.shapes[kSourceRanges],
+             lane.near.buffer, d.poses.buffer, d.body_shapes.buffer, lane.jobs.buffer, lane.first_items.buffer,
+             lane.frames.buffer, lane.vertices.buffer);
     launch(d, p, jobs_count);
     if (grid(lane)) return;
     reserve(lane.staging, lane.items * sizeof(rtcd_candidate));
@@ -1100,6 +1110,7 @@ class OpenClExecutor final : public RayExecutor {
   uint64_t batches_ = 0;  // batches with rays
   uint64_t step_ = 0;     // begin_step calls
   std::span<const rtcd_pose> poses_;  // the step's (begin_step)
+  std::vector<rtcd_uint> body_shapes_;  // by BodyId (add_body)
   bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback
   RayBatch* full_ = nullptr;  // the step's full batch, enqueued and not finished
   std::mutex recovering_;     // one waiter for a device's recovery reads

@@ -173,6 +173,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     if (shape >= shapes_.size()) throw UsageError("add_body: unknown shape " + std::to_string(shape));
     bodies_.push_back({shape, checked(pose), true, {}, 0});
     poses_.push_back(to_kernel(bodies_.back().pose));
+    executor_->add_body(shape);
     return BodyId(bodies_.size() - 1);
   }
 

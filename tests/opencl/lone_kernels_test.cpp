@@ -176,6 +176,8 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   }
   std::vector<rtcd_pair_setup> pairs(kJobs / 2);
   std::uniform_int_distribution<rtcd_uint> body(0, kBodies - 1), shape(0, kShapes - 1);
+  std::vector<rtcd_uint> body_shapes(kBodies);
+  for (rtcd_uint& s : body_shapes) s = shape(g);
   for (size_t i = 0; i < pairs.size(); ++i) {
     rtcd_pair_setup& p = pairs[i];
     p.motion = i % 5 == 0 ? 0.0 : size(g) / 5;
@@ -187,8 +189,6 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
       p.bodies[1] = (p.bodies[0] + 1) % kBodies;
       for (int k = 0; k < 3; ++k) poses[p.bodies[1]].position[k] = poses[p.bodies[0]].position[k] + unit(g);
     }
-    p.shapes[0] = shape(g);
-    p.shapes[1] = shape(g);
     // Walks: nothing to list, the jobs and frames alone.
     p.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_PAIR_EDGES(0) : 0u) | (bit(g) ? RTCD_PAIR_EDGES(1) : 0u);
     p.first_item = rtcd_uint(i) * 3000;
@@ -220,16 +220,17 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     // second, then the other way, its items after the first's.
     for (size_t j = 0; j < kJobs; ++j) {
       const rtcd_pair_setup& p = pairs[j / 2];
-      const rtcd_uint d = j % 2;
-      rtcd_job_setup& s = setups[j] =
-          rtcd_direction_setup(&p, d, config, &settings, &scales[p.shapes[0]], &scales[p.shapes[1]]);
+      const rtcd_uint d = j % 2, shapes[2] = {body_shapes[p.bodies[0]], body_shapes[p.bodies[1]]};
+      rtcd_job_setup& s = setups[j] = rtcd_direction_setup(&p, d, config, &settings, shapes[0], shapes[1],
+                                                           &scales[shapes[0]], &scales[shapes[1]]);
       ASSERT_EQ(s.source_body, p.bodies[d]);
       ASSERT_EQ(s.target_body, p.bodies[1 - d]);
-      ASSERT_EQ(s.target, p.shapes[1 - d]);
+      ASSERT_EQ(s.source, shapes[d]);
+      ASSERT_EQ(s.target, shapes[1 - d]);
       ASSERT_EQ(s.first_item, d == 0 ? p.first_item : p.first_item + p.item_count[0]);
       ASSERT_EQ(s.first_tracked, p.first[d]);
       ASSERT_EQ((s.flags & RTCD_JOB_EDGES) != 0, (p.flags & RTCD_PAIR_EDGES(d)) != 0);
-      const rtcd_pair_limits l = rtcd_derive_limits(&settings, &scales[p.shapes[1]], &scales[p.shapes[0]], p.motion);
+      const rtcd_pair_limits l = rtcd_derive_limits(&settings, &scales[shapes[1]], &scales[shapes[0]], p.motion);
       ASSERT_EQ(s.extension, l.distance_extension) << "the rules are symmetric";
       ASSERT_EQ(s.reach, config & RTCD_CONFIG_AUTOMATIC ? l.displacement_threshold : l.distance_extension);
       ASSERT_EQ(s.max_walk_steps, l.max_walk_steps);
@@ -244,9 +245,9 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     const cl::Buffer args[] = {buffer_of(*rt, table),  buffer_of(*rt, traits), buffer_of(*rt, bounds),
                                buffer_of(*rt, scales), buffer_of(*rt, unused), buffer_of(*rt, unused),
                                buffer_of(*rt, unused), buffer_of(*rt, unused),
-                               buffer_of(*rt, poses),  jobs_buffer,            firsts_buffer,
-                               frames_buffer,          buffer_of(*rt, unused)};
-    for (cl_uint i = 0; i < 13; ++i) k.setArg(i + 7, args[i]);
+                               buffer_of(*rt, poses),  buffer_of(*rt, body_shapes), jobs_buffer,
+                               firsts_buffer,          frames_buffer,          buffer_of(*rt, unused)};
+    for (cl_uint i = 0; i < 14; ++i) k.setArg(i + 7, args[i]);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((kJobs + kGroupSize - 1) / kGroupSize * kGroupSize),
                                cl::NDRange(kGroupSize));
     queue.finish();

@@ -143,6 +143,9 @@ class RayExecutor {
   // its scale (measured only when some limit is derived), for an executor
   // that derives the jobs' limits where it runs them (rtcd_derive_limits).
   virtual void add_shape(std::shared_ptr<const Shape> shape, const ShapeScale& scale) = 0;
+  // Called once per body, in BodyId order, with its shape, for an executor
+  // that keeps the bodies' shapes where it runs the jobs.
+  virtual void add_body(ShapeId /*shape*/) {}
   // Called before each step's batches: a residence is good for the step
   // after the one that wrote it. `poses`: every body's pose by BodyId, the
   // step's, for an executor that makes the jobs' frames where it runs them

@@ -65,12 +65,12 @@ typedef struct {
  * casts the first body's rays against the second, direction 1 the
  * second's against the first. The directions share the motion, the limits
  * (derived from the motion on the device) and the mode, and their items
- * follow one another. 56 bytes. */
+ * follow one another. The bodies' shapes are the device's already. 48
+ * bytes. */
 typedef struct {
   double motion; /* in the last step: the m of the limits' rules (rtcd_derive_limits) */
   double moved;  /* iterative pairs: since the pair's full step (equation 2.1) */
   rtcd_uint bodies[2];
-  rtcd_uint shapes[2];
   rtcd_uint flags;      /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d) */
   rtcd_uint first_item; /* direction 0's */
   rtcd_uint item_count[2];
@@ -78,11 +78,12 @@ typedef struct {
 } rtcd_pair_setup;
 
 /* Direction d's setup, with the pair's limits derived from its motion, the
- * settings and its shapes' scales (shapes[0]'s, shapes[1]'s: the rules are
- * symmetric). */
+ * settings and its bodies' shapes' scales (bodies[0]'s shape and scale,
+ * then bodies[1]'s: the rules are symmetric). */
 RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_uint d, rtcd_uint config,
-                                                const rtcd_limit_settings* settings,
-                                                const rtcd_shape_scale* scale_0, const rtcd_shape_scale* scale_1) {
+                                                const rtcd_limit_settings* settings, rtcd_uint shape_0,
+                                                rtcd_uint shape_1, const rtcd_shape_scale* scale_0,
+                                                const rtcd_shape_scale* scale_1) {
   rtcd_job_setup s;
   const int iterative = (p->flags & RTCD_JOB_ITERATIVE) != 0;
   const rtcd_pair_limits limits = rtcd_derive_limits(settings, scale_0, scale_1, p->motion);
@@ -91,8 +92,8 @@ RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_u
   s.moved = p->moved;
   s.source_body = p->bodies[d];
   s.target_body = p->bodies[1 - d];
-  s.source = p->shapes[d];
-  s.target = p->shapes[1 - d];
+  s.source = d ? shape_1 : shape_0;
+  s.target = d ? shape_0 : shape_1;
   s.max_walk_steps = limits.max_walk_steps;
   s.flags = (p->flags & RTCD_JOB_ITERATIVE) | ((p->flags & RTCD_PAIR_EDGES(d)) ? RTCD_JOB_EDGES : 0u);
   s.first_item = p->first_item + (d ? p->item_count[0] : 0u);
