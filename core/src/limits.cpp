@@ -86,8 +86,8 @@ rtcd_limit_settings limit_settings(const Config& config) {
   return c;
 }
 
-PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeScale& b, double motion) {
-  const rtcd_limit_settings settings = limit_settings(config);
+PairLimits derive_limits(const rtcd_limit_settings& settings, const ShapeScale& a, const ShapeScale& b,
+                         double motion) {
   const rtcd_shape_scale sa = to_kernel(a), sb = to_kernel(b);
   const rtcd_pair_limits l = rtcd_derive_limits(&settings, &sa, &sb, motion);
   return {l.displacement_threshold, l.distance_extension, l.max_walk_steps};

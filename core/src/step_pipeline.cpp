@@ -140,7 +140,8 @@ class PipelineNarrowPhase final : public NarrowPhase {
         name_(std::move(name)),
         devices_(std::move(devices)),
         executor_(std::move(executor)),
-        derive_(derives_limits(config_)) {
+        derive_(derives_limits(config_)),
+        limit_settings_(limit_settings(config_)) {
     if (threads > 0) arena_.emplace(threads);
     executor_->configure(config_);
   }
@@ -365,6 +366,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
   std::unique_ptr<RayExecutor> executor_;
   std::optional<tbb::task_arena> arena_;  // threads > 0: this narrow phase's own
   bool derive_;  // some limit follows the scene: shapes are measured, motions tracked
+  rtcd_limit_settings limit_settings_;  // the configuration's, as derive_limits reads them
   std::vector<ShapeEntry> shapes_;
   std::vector<Body> bodies_;
   std::vector<rtcd_pose> poses_;  // bodies_'s poses as the frames take them (rtcd_relative_frame)
@@ -542,7 +544,7 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
     double motion = 0.0;
     if (low.seen > 0 && low.seen + 1 == step_ && high.seen > 0 && high.seen + 1 == step_)
       motion = max_displacement(relative_of(low.previous, high.previous), relative, radius);
-    w.limits = derive_limits(config_, shapes_[low.shape].scale, shapes_[high.shape].scale, motion);
+    w.limits = derive_limits(limit_settings_, shapes_[low.shape].scale, shapes_[high.shape].scale, motion);
     w.step_motion = motion;
   } else {
     w.limits = {*config_.displacement_threshold, *config_.distance_extension, *config_.max_walk_steps};

@@ -66,12 +66,18 @@ struct ShapeScale {
 
 ShapeScale measure_scale(const Shape& shape);
 
-// The rules above (kernel/limits.h, rtcd_derive_limits); `motion` is m.
-PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeScale& b, double motion);
-
 // The rules' inputs as a device reads them.
 rtcd_shape_scale to_kernel(const ShapeScale& scale);
 rtcd_limit_settings limit_settings(const Config& config);
+
+// The rules above (kernel/limits.h, rtcd_derive_limits); `motion` is m.
+// The settings are limit_settings(config), made once by a caller that
+// derives many.
+PairLimits derive_limits(const rtcd_limit_settings& settings, const ShapeScale& a, const ShapeScale& b,
+                         double motion);
+inline PairLimits derive_limits(const Config& config, const ShapeScale& a, const ShapeScale& b, double motion) {
+  return derive_limits(limit_settings(config), a, b, motion);
+}
 
 // Whether any limit is left to the rules (only then are scales and motions needed).
 inline bool derives_limits(const Config& config) {
@@ -80,6 +86,6 @@ inline bool derives_limits(const Config& config) {
 
 // The least extension the rules give a pair in which one shape has `radius`
 // (hosts growing broad-phase boxes by half of it find every pair within it).
-inline double resting_extension(double radius) { return radius / 10.0; }
+inline double resting_extension(double radius) { return rtcd_resting_extension(radius); }
 
 }  // namespace rtcd

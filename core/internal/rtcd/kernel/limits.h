@@ -42,6 +42,10 @@ typedef struct {
 RTCD_INLINE double rtcd_min_d(double a, double b) { return b < a ? b : a; }
 RTCD_INLINE double rtcd_max_d(double a, double b) { return a < b ? b : a; }
 
+/* The least extension the rules give a pair whose smaller shape has this
+ * radius: a resting pair's (no motion). */
+RTCD_INLINE double rtcd_resting_extension(double radius) { return radius / 10.0; }
+
 /* The rules of limits.hpp; `motion` is m. */
 RTCD_INLINE rtcd_pair_limits rtcd_derive_limits(const rtcd_limit_settings* c, const rtcd_shape_scale* a,
                                                 const rtcd_shape_scale* b, double motion) {
@@ -50,7 +54,7 @@ RTCD_INLINE rtcd_pair_limits rtcd_derive_limits(const rtcd_limit_settings* c, co
   const double thickness = rtcd_min_d(rtcd_min_d(a->thickness, b->thickness), 2.0 * size);
   l.distance_extension = (c->set & RTCD_LIMIT_EXTENSION)
                              ? c->distance_extension
-                             : rtcd_max_d(size / 10.0, rtcd_min_d(2.0 * motion, size));
+                             : rtcd_max_d(rtcd_resting_extension(size), rtcd_min_d(2.0 * motion, size));
   l.displacement_threshold = (c->set & RTCD_LIMIT_THRESHOLD)
                                  ? c->displacement_threshold
                                  : rtcd_min_d(l.distance_extension / 2.0, thickness / 4.0);
