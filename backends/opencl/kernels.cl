@@ -118,9 +118,9 @@ RTCD_INLINE void rtcd_merge_leaves(__global const rtcd_uint* near, __global cons
 /* One job, before its items, made from its pair's setup (job j is
  * direction j % 2 of pair j / 2) as the host makes it: its limits from the
  * pair's motion, the configuration's limit settings and its bodies' shapes'
- * scales (rtcd_derive_limits), its parameters (rtcd_make_params), its first item,
- * and its frame from its
- * bodies' poses (rtcd_relative_frame); for a full job, the source items
+ * scales (rtcd_derive_limits), its parameters (rtcd_make_params) with its
+ * first item (rtcd_first_items), and its frame from its bodies' poses
+ * (rtcd_relative_frame); for a full job, the source items
  * (origins, then edges) of its near leaves, in item order, listed as its
  * items (the host counted them): a short list of leaves by merging their
  * items (each leaf's in order), bits by testing every item. */
@@ -132,7 +132,7 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
                            __global const rtcd_uint* leaf_items, __global const rtcd_uint* source_ranges,
                            __global const rtcd_uint* near, __global const rtcd_pose* poses,
                            __global const rtcd_uint* body_shapes,
-                           __global rtcd_device_job* jobs, __global rtcd_uint* first_items,
+                           __global rtcd_device_job* jobs, __global const rtcd_uint* first_items,
                            __global rtcd_frame* frames, __global rtcd_uint* vertices) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint v, n, count, shape_0, shape_1;
@@ -156,14 +156,14 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   shape_1 = body_shapes[pair.bodies[1]];
   scale_0 = scales[shape_0];
   scale_1 = scales[shape_1];
-  s = rtcd_direction_setup(&pair, j % 2, config, &settings, shape_0, shape_1, &scale_0, &scale_1);
+  s = rtcd_direction_setup(&pair, j % 2, first_items[j - j % 2], config, &settings, shape_0, shape_1, &scale_0,
+                           &scale_1);
   source_traits = traits[s.source];
   target_traits = traits[s.target];
   source_bounds = bounds[s.source];
   target_bounds = bounds[s.target];
   job = rtcd_device_job_of(config, &s, &source_traits, &target_traits, &target_bounds);
   jobs[j] = job;
-  first_items[j] = s.first_item;
   source = poses[s.source_body];
   target = poses[s.target_body];
   rtcd_relative_frame(&source, &target, &source_bounds, &target_bounds, s.extension, &frame);
@@ -294,6 +294,33 @@ __kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count
     n += counts[j];
   }
 }
+
+#ifdef RTCD_HAS_DOUBLE
+/* The batch's item list laid out on the device: each job's first item, an
+ * exclusive prefix sum of the pairs' item counts (job 2p is direction 0
+ * of pair p, job 2p + 1 direction 1), for rtcd_prepare. One work-group. */
+__kernel void rtcd_first_items(__global const rtcd_pair_setup* setups, rtcd_uint pair_count,
+                               __global rtcd_uint* first_items) {
+  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+  const rtcd_uint lid = get_local_id(0), width = min((rtcd_uint)get_local_size(0), (rtcd_uint)RTCD_SCAN_WIDTH);
+  rtcd_uint p, begin = 0, end = 0, n = 0;
+  if (lid < width) {
+    rtcd_scan_share(pair_count, lid, width, &begin, &end);
+    for (p = begin; p < end; ++p) n += setups[p].item_count[0] + setups[p].item_count[1];
+    partial[lid] = n;
+  }
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid == 0) rtcd_scan_shares(partial, width);
+  barrier(CLK_LOCAL_MEM_FENCE);
+  if (lid >= width) return;
+  n = partial[lid];
+  for (p = begin; p < end; ++p) {
+    first_items[2 * p] = n;
+    first_items[2 * p + 1] = n + setups[p].item_count[0];
+    n += setups[p].item_count[0] + setups[p].item_count[1];
+  }
+}
+#endif
 
 /* One item: a candidate moves to its place in the batch's ray list. */
 __kernel void rtcd_scatter(__global const rtcd_uint* first_items, __global const rtcd_uint* first_rays,

@@ -4,11 +4,12 @@
 // the device holding its tracked rays; the others go to the least loaded
 // by expected rays), each device with its own queue, and all devices run
 // at once:
-//   1. rtcd_prepare: each job made from its pair's 56-byte setup (both
-//      directions: limits from the pair's motion, parameters, first items)
-//      and its frame from its bodies' poses, by the host's own functions
-//      (kernel/limits.h, kernel/job.h, kernel/frame.h),
-//      then rtcd_select: every
+//   1. rtcd_first_items: the jobs' first items, a scan of the pairs' item
+//      counts; rtcd_prepare: each job made from its pair's 40-byte setup
+//      (both directions: limits from the pair's motion, parameters; the
+//      bodies' shapes are on the device) and its frame from its bodies'
+//      poses, by the host's own functions (kernel/limits.h, kernel/job.h,
+//      kernel/frame.h), then rtcd_select: every
 //      possible ray (source item: a vertex or an edge, or tracked ray)
 //      placed in the target's frame in double and flagged when it is a
 //      candidate (the host makes the frames and places the rays when a
@@ -67,7 +68,7 @@ static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && size
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 60 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
-static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 48 && alignof(rtcd_pair_setup) == 8 &&
+static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 40 && alignof(rtcd_pair_setup) == 8 &&
               sizeof(rtcd_shape_scale) == 32 && sizeof(rtcd_limit_settings) == 24 &&
               sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
@@ -132,7 +133,7 @@ struct Lane {
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
+  cl::Kernel first_items, prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
@@ -185,6 +186,7 @@ class OpenClExecutor final : public RayExecutor {
         device.recovery = cl::CommandQueue(runtime_->context, d);
         for (auto& events : device.recovering) events.reserve(2);
         if (runtime_->place_on_device) {
+          device.first_items = cl::Kernel(runtime_->program, "rtcd_first_items");
           device.prepare = cl::Kernel(runtime_->program, "rtcd_prepare");
           device.select = cl::Kernel(runtime_->program, "rtcd_select");
           device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
@@ -198,7 +200,7 @@ class OpenClExecutor final : public RayExecutor {
         device.lay_out = cl::Kernel(runtime_->program, "rtcd_lay_out");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
-             {&device.prepare, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
+             {&device.first_items, &device.prepare, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
               &device.trace_items, &device.tallies, &device.total, &device.lay_out})
           if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
@@ -570,8 +572,8 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_uint first = s.flags & RTCD_JOB_ITERATIVE ? s.first_tracked : s.first_near;
     const rtcd_uint edges = s.flags & RTCD_JOB_EDGES ? RTCD_PAIR_EDGES(d) : 0u;
     if (d == 0) {
-      lane.host_setups.push_back({job.motion, s.moved, {s.source_body, s.target_body},
-                                  (s.flags & RTCD_JOB_ITERATIVE) | edges, s.first_item, {s.item_count, 0}, {first, 0}});
+      lane.host_setups.push_back({job.motion, {s.source_body, s.target_body}, (s.flags & RTCD_JOB_ITERATIVE) | edges,
+                                  s.moved, {s.item_count, 0}, {first, 0}});
     } else {
       rtcd_pair_setup& p = lane.host_setups.back();
       p.flags |= edges;
@@ -580,8 +582,10 @@ class OpenClExecutor final : public RayExecutor {
     }
     const rtcd_pair_setup& p = lane.host_setups.back();
     const rtcd_uint shape_0 = body_shapes_.at(p.bodies[0]), shape_1 = body_shapes_.at(p.bodies[1]);
-    const rtcd_job_setup made = rtcd_direction_setup(&p, d, config_flags(config_), &limit_settings_, shape_0,
-                                                     shape_1, &data_.scales[shape_0], &data_.scales[shape_1]);
+    const rtcd_uint pair_first_item = d == 0 ? s.first_item : s.first_item - p.item_count[0];
+    const rtcd_job_setup made =
+        rtcd_direction_setup(&p, d, pair_first_item, config_flags(config_), &limit_settings_, shape_0, shape_1,
+                             &data_.scales[shape_0], &data_.scales[shape_1]);
     if (job.motion != p.motion || std::memcmp(&made, &s, sizeof(s)) != 0)
       throw Error("a pair's setup does not make its job " + std::to_string(lane.batch_jobs.back()) +
                   " (jobs 2i and 2i + 1 must be one pair's two directions, their limits derived from its motion)");
@@ -810,6 +814,8 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
     reserve(lane.near, 1);  // unread by walks
     if (!lane.host_jobs.front().params.iterative) write(d, lane.near, lane.host_near);
+    set_args(d.first_items, 0, lane.setups.buffer, jobs_count / 2, lane.first_items.buffer);
+    launch_group(d, d.first_items);
     cl::Kernel& p = d.prepare;
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,

@@ -286,7 +286,7 @@ rtcd_job_setup job_setup(const RayJob& job, const Config& config) {
   rtcd_job_setup s{};
   s.extension = job.limits.distance_extension;
   s.reach = job.limits.watch_reach(config.mode);
-  s.moved = job.moved;
+  s.moved = rtcd_float_at_least(job.moved);
   s.source_body = job.source_body;
   s.target_body = job.target_body;
   s.source = job.source;

@@ -81,6 +81,30 @@ TEST(OpenClScans, OffsetsAreTheHostsPrefixSumAroundGroupMultiples) {
   }
 }
 
+// rtcd_first_items: job 2p (direction 0 of pair p) starts where the pairs
+// before it end, job 2p + 1 after direction 0's items.
+TEST(OpenClScans, FirstItemsAreTheHostsPrefixSumAroundGroupMultiples) {
+  const auto rt = runtime();
+  if (!rt->place_on_device) GTEST_FAIL() << "the device lacks fp64: the host lays out the items there";
+  std::mt19937 g(15);
+  std::uniform_int_distribution<rtcd_uint> count(0, 40);
+  for (const size_t pairs : kJobCounts) {
+    SCOPED_TRACE(std::to_string(pairs) + " pairs");
+    std::vector<rtcd_pair_setup> setups(pairs);
+    for (rtcd_pair_setup& p : setups) p = {0.0, {0, 0}, 0u, 0.0f, {count(g), count(g)}, {0, 0}};
+    std::vector<rtcd_uint> first_items(2 * pairs, 0xdeadbeef);
+    const cl::Buffer firsts_buffer = buffer_of(*rt, first_items);
+    run_scan(*rt, "rtcd_first_items", pairs, {buffer_of(*rt, setups), firsts_buffer});
+    read_back(*rt, firsts_buffer, first_items);
+    rtcd_uint sum = 0;
+    for (size_t p = 0; p < pairs; ++p) {
+      ASSERT_EQ(first_items[2 * p], sum) << "pair " << p;
+      ASSERT_EQ(first_items[2 * p + 1], sum + setups[p].item_count[0]) << "pair " << p;
+      sum += setups[p].item_count[0] + setups[p].item_count[1];
+    }
+  }
+}
+
 TEST(OpenClScans, TotalsAreTheHostsSumsAroundGroupMultiples) {
   const auto rt = runtime();
   std::mt19937 g(12);
@@ -137,7 +161,7 @@ TEST(OpenClScans, TotalsAreTheHostsSumsAroundGroupMultiples) {
 }
 
 // Random pair setups, shapes, scales, poses far from the origin,
-// configurations and limit settings: the jobs, first items and frames
+// configurations and limit settings: the jobs (with their first items) and frames
 // rtcd_prepare makes are those the host's rtcd_derive_limits,
 // rtcd_make_params and rtcd_relative_frame make from each direction's
 // setup, bit for bit, and the frame
@@ -181,7 +205,7 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   for (size_t i = 0; i < pairs.size(); ++i) {
     rtcd_pair_setup& p = pairs[i];
     p.motion = i % 5 == 0 ? 0.0 : size(g) / 5;
-    p.moved = size(g) / 30;
+    p.moved = float(size(g) / 30);
     p.bodies[0] = body(g);
     p.bodies[1] = body(g);
     // Neighbours a few units apart (the candidate box not empty), and any two.
@@ -191,14 +215,15 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     }
     // Walks: nothing to list, the jobs and frames alone.
     p.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_PAIR_EDGES(0) : 0u) | (bit(g) ? RTCD_PAIR_EDGES(1) : 0u);
-    p.first_item = rtcd_uint(i) * 3000;
     p.item_count[0] = word(g);
     p.item_count[1] = word(g);
     p.first[0] = word(g);
     p.first[1] = word(g);
   }
   std::vector<rtcd_device_shape> table(kShapes);
+  // Each pair's items after the last's, as rtcd_first_items lays them out.
   std::vector<rtcd_uint> unused(1), first_items(kJobs);
+  for (size_t j = 0, n = 0; j < kJobs; n += pairs[j / 2].item_count[j % 2], ++j) first_items[j] = rtcd_uint(n);
   std::vector<rtcd_device_job> jobs(kJobs);
   std::vector<rtcd_frame> frames(kJobs);
   std::vector<rtcd_job_setup> setups(kJobs);
@@ -221,13 +246,13 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     for (size_t j = 0; j < kJobs; ++j) {
       const rtcd_pair_setup& p = pairs[j / 2];
       const rtcd_uint d = j % 2, shapes[2] = {body_shapes[p.bodies[0]], body_shapes[p.bodies[1]]};
-      rtcd_job_setup& s = setups[j] = rtcd_direction_setup(&p, d, config, &settings, shapes[0], shapes[1],
-                                                           &scales[shapes[0]], &scales[shapes[1]]);
+      rtcd_job_setup& s = setups[j] = rtcd_direction_setup(&p, d, first_items[j - d], config, &settings, shapes[0],
+                                                           shapes[1], &scales[shapes[0]], &scales[shapes[1]]);
       ASSERT_EQ(s.source_body, p.bodies[d]);
       ASSERT_EQ(s.target_body, p.bodies[1 - d]);
       ASSERT_EQ(s.source, shapes[d]);
       ASSERT_EQ(s.target, shapes[1 - d]);
-      ASSERT_EQ(s.first_item, d == 0 ? p.first_item : p.first_item + p.item_count[0]);
+      ASSERT_EQ(s.first_item, first_items[j]);
       ASSERT_EQ(s.first_tracked, p.first[d]);
       ASSERT_EQ((s.flags & RTCD_JOB_EDGES) != 0, (p.flags & RTCD_PAIR_EDGES(d)) != 0);
       const rtcd_pair_limits l = rtcd_derive_limits(&settings, &scales[shapes[1]], &scales[shapes[0]], p.motion);
@@ -252,14 +277,12 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
                                cl::NDRange(kGroupSize));
     queue.finish();
     read_back(*rt, jobs_buffer, jobs);
-    read_back(*rt, firsts_buffer, first_items);
     read_back(*rt, frames_buffer, frames);
     for (size_t j = 0; j < kJobs; ++j) {
       const rtcd_job_setup& s = setups[j];
       const rtcd_device_job job =
           rtcd_device_job_of(config, &s, &traits[s.source], &traits[s.target], &bounds[s.target]);
       ASSERT_EQ(std::memcmp(&job, &jobs[j], sizeof(job)), 0) << "job " << j << ": the device's job differs";
-      ASSERT_EQ(first_items[j], s.first_item) << "job " << j;
       rtcd_frame host;
       rtcd_relative_frame(&poses[s.source_body], &poses[s.target_body], &bounds[s.source], &bounds[s.target],
                           s.extension, &host);

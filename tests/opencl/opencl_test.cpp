@@ -365,7 +365,7 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
   // Up: every body's pose and a setup a pair (both directions' parameters,
   // first items and frames are made on the device; the bodies' shapes went
   // up with the first step); the walks' rays are there already.
-  constexpr size_t kPose = 56, kPair = 48;
+  constexpr size_t kPose = 56, kPair = 40;
   size_t walked = 0, reported = 0;
   for (size_t s = 2; s < steps.size(); ++s) {
     SCOPED_TRACE("step " + std::to_string(s));

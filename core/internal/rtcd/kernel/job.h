@@ -45,7 +45,7 @@ RTCD_INLINE float rtcd_float_at_most(double x) {
 typedef struct {
   double extension; /* PairLimits::distance_extension */
   double reach;     /* PairLimits::watch_reach: how far from the target a vertex is watched */
-  double moved;     /* iterative jobs: the pair's motion since its full step (equation 2.1) */
+  float moved;      /* iterative jobs: the pair's motion since its full step (equation 2.1), rounded up */
   rtcd_uint source_body;
   rtcd_uint target_body;
   rtcd_uint source; /* shapes */
@@ -56,6 +56,7 @@ typedef struct {
   rtcd_uint item_count;
   rtcd_uint first_tracked; /* iterative jobs: where its tracked rays are */
   rtcd_uint first_near;    /* full jobs: where its near leaves are */
+  rtcd_uint unused;        /* 0: no padding, so two setups compare bytewise */
 } rtcd_job_setup;
 
 /* RTCD_JOB_EDGES of a pair setup's direction d. */
@@ -65,22 +66,24 @@ typedef struct {
  * casts the first body's rays against the second, direction 1 the
  * second's against the first. The directions share the motion, the limits
  * (derived from the motion on the device) and the mode, and their items
- * follow one another. The bodies' shapes are the device's already. 48
+ * follow one another, after the pair before's (a device scans the counts:
+ * rtcd_first_items). The bodies' shapes are the device's already. 40
  * bytes. */
 typedef struct {
   double motion; /* in the last step: the m of the limits' rules (rtcd_derive_limits) */
-  double moved;  /* iterative pairs: since the pair's full step (equation 2.1) */
   rtcd_uint bodies[2];
-  rtcd_uint flags;      /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d) */
-  rtcd_uint first_item; /* direction 0's */
+  rtcd_uint flags; /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d) */
+  float moved;     /* iterative pairs: since the pair's full step (equation 2.1), rounded up */
   rtcd_uint item_count[2];
   rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its near leaves */
 } rtcd_pair_setup;
 
 /* Direction d's setup, with the pair's limits derived from its motion, the
  * settings and its bodies' shapes' scales (bodies[0]'s shape and scale,
- * then bodies[1]'s: the rules are symmetric). */
-RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_uint d, rtcd_uint config,
+ * then bodies[1]'s: the rules are symmetric); `first_item` is direction
+ * 0's. */
+RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_uint d, rtcd_uint first_item,
+                                                rtcd_uint config,
                                                 const rtcd_limit_settings* settings, rtcd_uint shape_0,
                                                 rtcd_uint shape_1, const rtcd_shape_scale* scale_0,
                                                 const rtcd_shape_scale* scale_1) {
@@ -96,10 +99,11 @@ RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_u
   s.target = d ? shape_0 : shape_1;
   s.max_walk_steps = limits.max_walk_steps;
   s.flags = (p->flags & RTCD_JOB_ITERATIVE) | ((p->flags & RTCD_PAIR_EDGES(d)) ? RTCD_JOB_EDGES : 0u);
-  s.first_item = p->first_item + (d ? p->item_count[0] : 0u);
+  s.first_item = first_item + (d ? p->item_count[0] : 0u);
   s.item_count = p->item_count[d];
   s.first_tracked = iterative ? p->first[d] : 0u;
   s.first_near = iterative ? 0u : p->first[d];
+  s.unused = 0;
   return s;
 }
 
@@ -127,7 +131,7 @@ RTCD_INLINE rtcd_trace_params rtcd_make_params(rtcd_uint config, const rtcd_job_
   p.watch = (config & RTCD_CONFIG_WATCH) != 0;
   p.verify = (config & RTCD_CONFIG_VERIFY) != 0 && !(mesh && target->convex);
   p.iterative = (s->flags & RTCD_JOB_ITERATIVE) != 0;
-  p.moved = rtcd_float_at_least(s->moved);
+  p.moved = s->moved;
   p.first_edge = source->first_edge;
   p.source_radius = source->sphere_radius;
   p.edges = (s->flags & RTCD_JOB_EDGES) != 0 && (config & RTCD_CONFIG_EDGES) != 0 &&
