@@ -6,6 +6,7 @@
 #include "device_types.h"
 #include "rtcd/kernel/bvh.h"
 #include "rtcd/kernel/fold.h"
+#include "rtcd/kernel/motion.h"
 #include "rtcd/kernel/walk.h"
 
 #ifdef RTCD_INJECTED_BUILD_FAILURE
@@ -117,8 +118,9 @@ RTCD_INLINE void rtcd_merge_leaves(__global const rtcd_uint* near, __global cons
 #ifdef RTCD_HAS_DOUBLE
 /* One job, before its items, made from its pair's setup (job j is
  * direction j % 2 of pair j / 2) as the host makes it: its limits from the
- * pair's motion, the configuration's limit settings and its bodies' shapes'
- * scales (rtcd_derive_limits), its parameters (rtcd_make_params) with its
+ * pair's motion (from its bodies' poses of the last step, `before`, to
+ * this step's: rtcd_pair_motion), the configuration's limit settings and
+ * its bodies' shapes' scales (rtcd_derive_limits), its parameters (rtcd_make_params) with its
  * first item (rtcd_first_items), and its frame from its bodies' poses
  * (rtcd_relative_frame); for a full job, the source items
  * (origins, then edges) of its near leaves, in item order, listed as its
@@ -131,11 +133,12 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
                            __global const rtcd_shape_scale* scales, __global const rtcd_uint* source_leaves,
                            __global const rtcd_uint* leaf_items, __global const rtcd_uint* source_ranges,
                            __global const rtcd_uint* near, __global const rtcd_pose* poses,
-                           __global const rtcd_uint* body_shapes,
+                           __global const rtcd_pose* before, __global const rtcd_uint* body_shapes,
                            __global rtcd_device_job* jobs, __global const rtcd_uint* first_items,
                            __global rtcd_frame* frames, __global rtcd_uint* vertices) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint v, n, count, shape_0, shape_1;
+  double motion = 0.0;
   rtcd_pair_setup pair;
   rtcd_limit_settings settings;
   rtcd_shape_scale scale_0, scale_1;
@@ -156,8 +159,10 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   shape_1 = body_shapes[pair.bodies[1]];
   scale_0 = scales[shape_0];
   scale_1 = scales[shape_1];
-  s = rtcd_direction_setup(&pair, j % 2, first_items[j - j % 2], config, &settings, shape_0, shape_1, &scale_0,
-                           &scale_1);
+  if (pair.flags & RTCD_PAIR_MOTION)
+    motion = rtcd_bodies_motion(pair.bodies[0], pair.bodies[1], before, poses, scale_0.radius, scale_1.radius);
+  s = rtcd_direction_setup(&pair, j % 2, first_items[j - j % 2], motion, config, &settings, shape_0, shape_1,
+                           &scale_0, &scale_1);
   source_traits = traits[s.source];
   target_traits = traits[s.target];
   source_bounds = bounds[s.source];

@@ -5,10 +5,11 @@
 // by expected rays), each device with its own queue, and all devices run
 // at once:
 //   1. rtcd_first_items: the jobs' first items, a scan of the pairs' item
-//      counts; rtcd_prepare: each job made from its pair's 40-byte setup
-//      (both directions: limits from the pair's motion, parameters; the
-//      bodies' shapes are on the device) and its frame from its bodies'
-//      poses, by the host's own functions (kernel/limits.h, kernel/job.h,
+//      counts; rtcd_prepare: each job made from its pair's 32-byte setup
+//      (both directions: the pair's motion from the poses of the last step
+//      and this one, limits from it, parameters; the bodies' shapes are on
+//      the device) and its frame from its bodies' poses, by the host's own
+//      functions (kernel/motion.h, kernel/limits.h, kernel/job.h,
 //      kernel/frame.h), then rtcd_select: every
 //      possible ray (source item: a vertex or an edge, or tracked ray)
 //      placed in the target's frame in double and flagged when it is a
@@ -55,6 +56,7 @@
 
 #include "device_types.h"
 #include "rtcd/error.hpp"
+#include "rtcd/kernel/motion.h"
 #include "runtime.hpp"
 #include "shape_data.hpp"
 
@@ -68,7 +70,7 @@ static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && size
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 60 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
-static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 40 && alignof(rtcd_pair_setup) == 8 &&
+static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 32 && alignof(rtcd_pair_setup) == 4 &&
               sizeof(rtcd_shape_scale) == 32 && sizeof(rtcd_limit_settings) == 24 &&
               sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
@@ -137,8 +139,10 @@ struct Device {
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
-  GrowingBuffer poses;         // every body's, the step's (rtcd_pose)
-  uint64_t poses_written = 0;  // the step they are
+  // Every body's pose (rtcd_pose): the step's, and the last step's, from
+  // which rtcd_prepare derives the pairs' motions.
+  GrowingBuffer poses, before;
+  uint64_t poses_written = 0, before_written = 0;  // the steps they are
   GrowingBuffer body_shapes;   // every body's shape, by BodyId
   size_t body_shapes_written = 0;
   // Tracked rays that stay on the device, by step parity: the step's
@@ -223,7 +227,8 @@ class OpenClExecutor final : public RayExecutor {
 
   void begin_step(std::span<const rtcd_pose> poses) override {
     ++step_;
-    poses_ = poses;
+    std::swap(last_poses_, poses_);
+    poses_.assign(poses.begin(), poses.end());
     on_cpu_ = false;
     for (Device& d : devices_) {
       d.kept_used[step_ % 2] = 0;
@@ -572,7 +577,8 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_uint first = s.flags & RTCD_JOB_ITERATIVE ? s.first_tracked : s.first_near;
     const rtcd_uint edges = s.flags & RTCD_JOB_EDGES ? RTCD_PAIR_EDGES(d) : 0u;
     if (d == 0) {
-      lane.host_setups.push_back({job.motion, {s.source_body, s.target_body}, (s.flags & RTCD_JOB_ITERATIVE) | edges,
+      const rtcd_uint motion = job.motion_measured ? RTCD_PAIR_MOTION : 0u;
+      lane.host_setups.push_back({{s.source_body, s.target_body}, (s.flags & RTCD_JOB_ITERATIVE) | edges | motion,
                                   s.moved, {s.item_count, 0}, {first, 0}});
     } else {
       rtcd_pair_setup& p = lane.host_setups.back();
@@ -583,12 +589,18 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_pair_setup& p = lane.host_setups.back();
     const rtcd_uint shape_0 = body_shapes_.at(p.bodies[0]), shape_1 = body_shapes_.at(p.bodies[1]);
     const rtcd_uint pair_first_item = d == 0 ? s.first_item : s.first_item - p.item_count[0];
-    const rtcd_job_setup made =
-        rtcd_direction_setup(&p, d, pair_first_item, config_flags(config_), &limit_settings_, shape_0, shape_1,
-                             &data_.scales[shape_0], &data_.scales[shape_1]);
-    if (job.motion != p.motion || std::memcmp(&made, &s, sizeof(s)) != 0)
+    const rtcd_shape_scale &scale_0 = data_.scales[shape_0], &scale_1 = data_.scales[shape_1];
+    const double motion =
+        p.flags & RTCD_PAIR_MOTION
+            ? rtcd_bodies_motion(p.bodies[0], p.bodies[1], last_poses_.data(), poses_.data(), scale_0.radius,
+                                 scale_1.radius)
+            : 0.0;
+    const rtcd_job_setup made = rtcd_direction_setup(&p, d, pair_first_item, motion, config_flags(config_),
+                                                     &limit_settings_, shape_0, shape_1, &scale_0, &scale_1);
+    if (job.motion != motion || std::memcmp(&made, &s, sizeof(s)) != 0)
       throw Error("a pair's setup does not make its job " + std::to_string(lane.batch_jobs.back()) +
-                  " (jobs 2i and 2i + 1 must be one pair's two directions, their limits derived from its motion)");
+                  " (jobs 2i and 2i + 1 must be one pair's two directions, their limits derived from its motion"
+                  " between the last step's poses and this step's)");
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves) appended
@@ -793,9 +805,17 @@ class OpenClExecutor final : public RayExecutor {
   void place_on_device(Device& d, Lane& lane) {
     const auto jobs_count = rtcd_uint(lane.host_jobs.size());
     if (d.poses_written != step_) {
+      std::swap(d.poses, d.before);
+      d.before_written = std::exchange(d.poses_written, step_);
       write(d, d.poses, poses_);
-      d.poses_written = step_;
     }
+    const bool motions = std::any_of(lane.host_setups.begin(), lane.host_setups.end(),
+                                     [](const rtcd_pair_setup& p) { return (p.flags & RTCD_PAIR_MOTION) != 0; });
+    if (motions && d.before_written != step_ - 1) {  // the device had no job last step
+      write(d, d.before, last_poses_);
+      d.before_written = step_ - 1;
+    }
+    reserve(d.before, 1);  // unread without motions
     if (d.body_shapes_written != body_shapes_.size()) {  // bodies were added
       write(d, d.body_shapes, body_shapes_);
       d.body_shapes_written = body_shapes_.size();
@@ -821,8 +841,8 @@ class OpenClExecutor final : public RayExecutor {
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
              l.distance_extension, l.max_walk_steps, l.set, d.shapes[kTable], d.shapes[kTraits], d.shapes[kBounds],
              d.shapes[kScales], d.shapes[kSourceLeaves], d.shapes[kLeafItems], d.shapes[kSourceRanges],
-             lane.near.buffer, d.poses.buffer, d.body_shapes.buffer, lane.jobs.buffer, lane.first_items.buffer,
-             lane.frames.buffer, lane.vertices.buffer);
+             lane.near.buffer, d.poses.buffer, d.before.buffer, d.body_shapes.buffer, lane.jobs.buffer,
+             lane.first_items.buffer, lane.frames.buffer, lane.vertices.buffer);
     launch(d, p, jobs_count);
     if (grid(lane)) return;
     reserve(lane.staging, lane.items * sizeof(rtcd_candidate));
@@ -1115,7 +1135,9 @@ class OpenClExecutor final : public RayExecutor {
   rtcd_limit_settings limit_settings_{};
   uint64_t batches_ = 0;  // batches with rays
   uint64_t step_ = 0;     // begin_step calls
-  std::span<const rtcd_pose> poses_;  // the step's (begin_step)
+  // Every body's pose, the step's (begin_step) and the last step's, kept
+  // for a device that was not sent them then.
+  std::vector<rtcd_pose> poses_, last_poses_;
   std::vector<rtcd_uint> body_shapes_;  // by BodyId (add_body)
   bool on_cpu_ = false;   // some batch of this step ran on the CPU fallback
   RayBatch* full_ = nullptr;  // the step's full batch, enqueued and not finished

@@ -88,15 +88,15 @@ Aabb Aabb::transformed(const Eigen::Matrix3d& rotation, const Eigen::Vector3d& t
   return {c - h, c + h};
 }
 
+// Equation 2.1 by the kernel's functions, which the devices run too.
 double rotation_angle(const Eigen::Quaterniond& q1, const Eigen::Quaterniond& q2) {
-  const Eigen::Quaterniond d = q1.conjugate() * q2;
-  // |w| folds q and -q together; atan2 keeps precision at both ends.
-  return 2.0 * std::atan2(d.vec().norm(), std::abs(d.w()));
+  const double a[4] = {q1.w(), q1.x(), q1.y(), q1.z()}, b[4] = {q2.w(), q2.x(), q2.y(), q2.z()};
+  return rtcd_rotation_angle(a, b);
 }
 
 double max_displacement(const Pose& relative_at_full_step, const Pose& relative_now, double max_radius) {
-  return (relative_at_full_step.position - relative_now.position).norm() +
-         rotation_angle(relative_at_full_step.orientation, relative_now.orientation) * max_radius;
+  const rtcd_pose a = to_kernel(relative_at_full_step), b = to_kernel(relative_now);
+  return rtcd_max_displacement(&a, &b, max_radius);
 }
 
 const char* to_string(PairMode mode) {

@@ -339,6 +339,7 @@ class PipelineNarrowPhase final : public NarrowPhase {
     bool expired;   // its certificate expired this step
     bool granted;   // certified this step
     double step_motion;  // equation 2.1 since the last step, when limits are derived (else 0)
+    bool motion_measured;  // step_motion is that of the last step's poses to this step's: both bodies were in pairs
   };
 
   Body& body_at(BodyId id) {
@@ -511,6 +512,7 @@ void PipelineNarrowPhase::prepare(std::span<const BodyPair> pairs, StepResult& o
       job.limits = w.limits;
       job.moved = iterative ? w.moved : 0.0;
       job.motion = w.step_motion;
+      job.motion_measured = w.motion_measured;
       job.residence = &w.state->residence[direction(source, target)];
       job.tracked =
           iterative ? walked(*w.state, direction(source, target), w.hold_edges) : std::span<const RayOutcome>{};
@@ -533,17 +535,21 @@ void PipelineNarrowPhase::decide(BodyPair p, PairWork& w) const {
   const BodyId lo = std::min(p.a, p.b), hi = std::max(p.a, p.b);
   const Body &low = bodies_[lo], &high = bodies_[hi];
   // Equation 2.1 bounds the motion of the points of the body the relative
-  // pose maps, which must lie within `radius` of its origin: a half-space
-  // (radius 0, no extent) is never the one mapped, or a turn about its
-  // origin far away would read as a turn in place.
-  const bool map_low = shapes_[low.shape].shape->radius() > 0.0;
-  const auto relative_of = [&](const Pose& l, const Pose& h) { return map_low ? h.inverse() * l : l.inverse() * h; };
-  const Pose relative = relative_of(low.pose, high.pose);
-  const double radius = std::max(shapes_[low.shape].shape->radius(), shapes_[high.shape].shape->radius());
+  // pose maps, which must lie within `radius` of its origin
+  // (rtcd_pair_relative). The kernel's functions: a device derives the
+  // pair's motion with them from the poses of this step and the last.
+  const double low_radius = shapes_[low.shape].shape->radius(), high_radius = shapes_[high.shape].shape->radius();
+  rtcd_pose relative_now;
+  rtcd_pair_relative(&poses_[lo], &poses_[hi], low_radius, &relative_now);
+  const Pose relative = from_kernel(relative_now);
+  const double radius = std::max(low_radius, high_radius);
+  w.motion_measured = derive_ && low.seen > 0 && low.seen + 1 == step_ && high.seen > 0 && high.seen + 1 == step_;
   if (derive_) {
     double motion = 0.0;
-    if (low.seen > 0 && low.seen + 1 == step_ && high.seen > 0 && high.seen + 1 == step_)
-      motion = max_displacement(relative_of(low.previous, high.previous), relative, radius);
+    if (w.motion_measured) {
+      const rtcd_pose low_before = to_kernel(low.previous), high_before = to_kernel(high.previous);
+      motion = rtcd_pair_motion(&low_before, &high_before, &poses_[lo], &poses_[hi], low_radius, high_radius);
+    }
     w.limits = derive_limits(limit_settings_, shapes_[low.shape].scale, shapes_[high.shape].scale, motion);
     w.step_motion = motion;
   } else {

@@ -16,6 +16,8 @@
 // same bits, or a device would place and trace rays the CPU does not.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -24,6 +26,7 @@
 
 #include "opencl/device_types.h"
 #include "opencl/runtime.hpp"
+#include "rtcd/criterion.hpp"
 
 namespace rtcd::test {
 namespace {
@@ -91,7 +94,7 @@ TEST(OpenClScans, FirstItemsAreTheHostsPrefixSumAroundGroupMultiples) {
   for (const size_t pairs : kJobCounts) {
     SCOPED_TRACE(std::to_string(pairs) + " pairs");
     std::vector<rtcd_pair_setup> setups(pairs);
-    for (rtcd_pair_setup& p : setups) p = {0.0, {0, 0}, 0u, 0.0f, {count(g), count(g)}, {0, 0}};
+    for (rtcd_pair_setup& p : setups) p = {{0, 0}, 0u, 0.0f, {count(g), count(g)}, {0, 0}};
     std::vector<rtcd_uint> first_items(2 * pairs, 0xdeadbeef);
     const cl::Buffer firsts_buffer = buffer_of(*rt, first_items);
     run_scan(*rt, "rtcd_first_items", pairs, {buffer_of(*rt, setups), firsts_buffer});
@@ -160,12 +163,13 @@ TEST(OpenClScans, TotalsAreTheHostsSumsAroundGroupMultiples) {
   }
 }
 
-// Random pair setups, shapes, scales, poses far from the origin,
-// configurations and limit settings: the jobs (with their first items) and frames
-// rtcd_prepare makes are those the host's rtcd_derive_limits,
-// rtcd_make_params and rtcd_relative_frame make from each direction's
-// setup, bit for bit, and the frame
-// is the transform target⁻¹ ∘ source (Eigen's, to rounding).
+// Random pair setups, shapes, scales, poses far from the origin and the
+// last step's near them, configurations and limit settings: the jobs (with
+// their first items) and frames rtcd_prepare makes are those the host's
+// rtcd_bodies_motion, rtcd_derive_limits, rtcd_make_params and
+// rtcd_relative_frame make from each direction's setup, bit for bit; the
+// frame is the transform target⁻¹ ∘ source and the motion equation 2.1
+// (Eigen's, to rounding).
 TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   const auto rt = runtime();
   if (!rt->place_on_device) GTEST_FAIL() << "the device lacks fp64: the host makes the frames there";
@@ -173,12 +177,17 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   std::uniform_real_distribution<double> unit(-1.0, 1.0), far(-1e4, 1e4), size(0.01, 3.0);
   std::uniform_int_distribution<rtcd_uint> word(0, 1000), bit(0, 1);
   constexpr size_t kBodies = 300, kShapes = 7, kJobs = 1000;
-  std::vector<rtcd_pose> poses(kBodies);
+  std::vector<rtcd_pose> poses(kBodies), before(kBodies);
   std::vector<Eigen::Quaterniond> orientations(kBodies);
   for (size_t b = 0; b < kBodies; ++b) {
     orientations[b] = Eigen::Quaterniond(unit(g), unit(g), unit(g), unit(g)).normalized();
     const Eigen::Quaterniond& q = orientations[b];
     poses[b] = {{q.w(), q.x(), q.y(), q.z()}, {far(g), far(g), far(g)}};
+    // The last step's: turned and moved a little, or (every third) as now.
+    const Eigen::Quaterniond turned =
+        b % 3 == 0 ? q : (q * Eigen::Quaterniond(Eigen::AngleAxisd(0.1 * unit(g), Eigen::Vector3d::UnitX())));
+    before[b] = {{turned.w(), turned.x(), turned.y(), turned.z()}, {poses[b].position[0] + 0.1 * unit(g),
+                 poses[b].position[1], poses[b].position[2] + (b % 3 == 0 ? 0.0 : 0.01 * unit(g))}};
   }
   std::vector<rtcd_box> bounds(kShapes);
   std::vector<rtcd_shape_traits> traits(kShapes);
@@ -204,7 +213,6 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   for (rtcd_uint& s : body_shapes) s = shape(g);
   for (size_t i = 0; i < pairs.size(); ++i) {
     rtcd_pair_setup& p = pairs[i];
-    p.motion = i % 5 == 0 ? 0.0 : size(g) / 5;
     p.moved = float(size(g) / 30);
     p.bodies[0] = body(g);
     p.bodies[1] = body(g);
@@ -214,7 +222,8 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
       for (int k = 0; k < 3; ++k) poses[p.bodies[1]].position[k] = poses[p.bodies[0]].position[k] + unit(g);
     }
     // Walks: nothing to list, the jobs and frames alone.
-    p.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_PAIR_EDGES(0) : 0u) | (bit(g) ? RTCD_PAIR_EDGES(1) : 0u);
+    p.flags = RTCD_JOB_ITERATIVE | (bit(g) ? RTCD_PAIR_EDGES(0) : 0u) | (bit(g) ? RTCD_PAIR_EDGES(1) : 0u) |
+              (i % 5 == 0 ? 0u : RTCD_PAIR_MOTION);
     p.item_count[0] = word(g);
     p.item_count[1] = word(g);
     p.first[0] = word(g);
@@ -232,7 +241,7 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
                    firsts_buffer = buffer_of(*rt, first_items), frames_buffer = buffer_of(*rt, frames);
   cl::Kernel k(rt->program, "rtcd_prepare");
   cl::CommandQueue queue(rt->context, rt->devices.front());
-  size_t boxes = 0;
+  size_t boxes = 0, moving = 0;
   // Configurations and limit settings: every limit derived, every one set, and mixes.
   const std::pair<rtcd_uint, rtcd_limit_settings> cases[] = {
       {0u, {0.0, 0.0, 0u, 0u}},
@@ -246,8 +255,32 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     for (size_t j = 0; j < kJobs; ++j) {
       const rtcd_pair_setup& p = pairs[j / 2];
       const rtcd_uint d = j % 2, shapes[2] = {body_shapes[p.bodies[0]], body_shapes[p.bodies[1]]};
-      rtcd_job_setup& s = setups[j] = rtcd_direction_setup(&p, d, first_items[j - d], config, &settings, shapes[0],
-                                                           shapes[1], &scales[shapes[0]], &scales[shapes[1]]);
+      const double motion = p.flags & RTCD_PAIR_MOTION
+                                ? rtcd_bodies_motion(p.bodies[0], p.bodies[1], before.data(), poses.data(),
+                                                     scales[shapes[0]].radius, scales[shapes[1]].radius)
+                                : 0.0;
+      if (p.flags & RTCD_PAIR_MOTION) {
+        // Equation 2.1 by Eigen: the relative pose of the lower id's body in
+        // the higher id's (the other way when it has no radius), before and now.
+        const rtcd_uint low = std::min(p.bodies[0], p.bodies[1]), high = std::max(p.bodies[0], p.bodies[1]);
+        const double low_radius = scales[body_shapes[low]].radius, high_radius = scales[body_shapes[high]].radius;
+        const auto relative = [&](const rtcd_pose& l, const rtcd_pose& h) {
+          const rtcd::Pose from = rtcd::from_kernel(low_radius > 0.0 ? l : h);
+          const rtcd::Pose to = rtcd::from_kernel(low_radius > 0.0 ? h : l);
+          return to.inverse() * from;
+        };
+        const rtcd::Pose was = relative(before[low], before[high]), is = relative(poses[low], poses[high]);
+        const double angle =
+            2.0 * std::atan2((was.orientation.conjugate() * is.orientation).vec().norm(),
+                             std::abs((was.orientation.conjugate() * is.orientation).w()));
+        const double expected =
+            (was.position - is.position).norm() + angle * std::max(low_radius, high_radius);
+        ASSERT_NEAR(motion, expected, 1e-9 * (1.0 + expected)) << "pair " << j / 2;
+        moving += motion > 0.0;
+      }
+      rtcd_job_setup& s = setups[j] = rtcd_direction_setup(&p, d, first_items[j - d], motion, config, &settings,
+                                                           shapes[0], shapes[1], &scales[shapes[0]],
+                                                           &scales[shapes[1]]);
       ASSERT_EQ(s.source_body, p.bodies[d]);
       ASSERT_EQ(s.target_body, p.bodies[1 - d]);
       ASSERT_EQ(s.source, shapes[d]);
@@ -255,7 +288,7 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
       ASSERT_EQ(s.first_item, first_items[j]);
       ASSERT_EQ(s.first_tracked, p.first[d]);
       ASSERT_EQ((s.flags & RTCD_JOB_EDGES) != 0, (p.flags & RTCD_PAIR_EDGES(d)) != 0);
-      const rtcd_pair_limits l = rtcd_derive_limits(&settings, &scales[shapes[1]], &scales[shapes[0]], p.motion);
+      const rtcd_pair_limits l = rtcd_derive_limits(&settings, &scales[shapes[1]], &scales[shapes[0]], motion);
       ASSERT_EQ(s.extension, l.distance_extension) << "the rules are symmetric";
       ASSERT_EQ(s.reach, config & RTCD_CONFIG_AUTOMATIC ? l.displacement_threshold : l.distance_extension);
       ASSERT_EQ(s.max_walk_steps, l.max_walk_steps);
@@ -270,9 +303,10 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     const cl::Buffer args[] = {buffer_of(*rt, table),  buffer_of(*rt, traits), buffer_of(*rt, bounds),
                                buffer_of(*rt, scales), buffer_of(*rt, unused), buffer_of(*rt, unused),
                                buffer_of(*rt, unused), buffer_of(*rt, unused),
-                               buffer_of(*rt, poses),  buffer_of(*rt, body_shapes), jobs_buffer,
-                               firsts_buffer,          frames_buffer,          buffer_of(*rt, unused)};
-    for (cl_uint i = 0; i < 14; ++i) k.setArg(i + 7, args[i]);
+                               buffer_of(*rt, poses),  buffer_of(*rt, before), buffer_of(*rt, body_shapes),
+                               jobs_buffer,            firsts_buffer,          frames_buffer,
+                               buffer_of(*rt, unused)};
+    for (cl_uint i = 0; i < 15; ++i) k.setArg(i + 7, args[i]);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((kJobs + kGroupSize - 1) / kGroupSize * kGroupSize),
                                cl::NDRange(kGroupSize));
     queue.finish();
@@ -302,6 +336,7 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     }
   }
   EXPECT_GT(boxes, 4 * kJobs / 10) << "the neighbours' candidate boxes must be boxes, or the test says little";
+  EXPECT_GT(moving, kJobs / 2) << "most pairs must move, or the motions' test says little";
 }
 
 // A full job's near leaves in either of their forms (rtcd_near_leaf: one

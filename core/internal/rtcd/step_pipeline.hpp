@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "rtcd/criterion.hpp"
 #include "rtcd/kernel/classify.h"
 #include "rtcd/kernel/tally.h"
 #include "rtcd/kernel/tracer.h"
@@ -68,6 +69,9 @@ struct RayJob {
   // The pair's motion in the last step, from which its limits were derived
   // (derive_limits' m; 0 when the Config sets every limit).
   double motion = 0.0;
+  // The motion is equation 2.1 from the bodies' poses of the last step
+  // (begin_step's, one step before) to this step's; else it is 0.
+  bool motion_measured = false;
   // Iterative jobs: last step's kept outcomes, the walks' start triangles.
   std::span<const RayOutcome> tracked;
   // The pair-direction's note for the executor, read and written by it;
@@ -124,11 +128,7 @@ struct RayBatch {
   }
 };
 
-// A pose and a box as kernel/frame.h takes them.
-inline rtcd_pose to_kernel(const Pose& pose) {
-  const Eigen::Quaterniond& q = pose.orientation;
-  return {{q.w(), q.x(), q.y(), q.z()}, {pose.position.x(), pose.position.y(), pose.position.z()}};
-}
+// A box as kernel/frame.h takes it.
 inline rtcd_box to_kernel(const Aabb& box) {
   return {{box.min.x(), box.min.y(), box.min.z()}, {box.max.x(), box.max.y(), box.max.z()}};
 }

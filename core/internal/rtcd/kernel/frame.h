@@ -48,27 +48,38 @@ RTCD_INLINE void rtcd_quaternion_matrix(const double q[4], double r[9]) {
 
 RTCD_INLINE double rtcd_abs_d(double x) { return x < 0.0 ? -x : x; }
 
-/* The frame of the source body in the target body's: rotation
- * conj(q_target) q_source, translation R_target^T (p_source - p_target);
+/* conj(a) b for quaternions (w, x, y, z). */
+RTCD_INLINE void rtcd_conjugate_product(const double a[4], const double b[4], double q[4]) {
+  q[0] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
+  q[1] = a[0] * b[1] - a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
+  q[2] = a[0] * b[2] - a[2] * b[0] - a[3] * b[1] + a[1] * b[3];
+  q[3] = a[0] * b[3] - a[3] * b[0] - a[1] * b[2] + a[2] * b[1];
+}
+
+/* The source body's pose in the target body's frame: orientation
+ * conj(q_target) q_source, position R_target^T (p_source - p_target). */
+RTCD_INLINE void rtcd_relative_pose(const rtcd_pose* source, const rtcd_pose* target, rtcd_pose* out) {
+  double rt[9], d[3];
+  int i;
+  rtcd_conjugate_product(target->orientation, source->orientation, out->orientation);
+  rtcd_quaternion_matrix(target->orientation, rt);
+  for (i = 0; i < 3; ++i) d[i] = source->position[i] - target->position[i];
+  for (i = 0; i < 3; ++i) out->position[i] = rt[i] * d[0] + rt[3 + i] * d[1] + rt[6 + i] * d[2];
+}
+
+/* The frame of the source body in the target body's (rtcd_relative_pose);
  * the candidate box is the source's bounds placed there (centre and
  * half-extents through |R|), cut to the target's bounds and grown by
  * `extension`. */
 RTCD_INLINE void rtcd_relative_frame(const rtcd_pose* source, const rtcd_pose* target, const rtcd_box* source_bounds,
                                      const rtcd_box* target_bounds, double extension, rtcd_frame* f) {
-  const double* a = target->orientation;
-  const double* b = source->orientation;
-  double q[4], rt[9], d[3], centre[3], extent[3], c, h;
+  rtcd_pose relative;
+  double centre[3], extent[3], c, h;
   int i;
-  /* conj(a) b */
-  q[0] = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3];
-  q[1] = a[0] * b[1] - a[1] * b[0] - a[2] * b[3] + a[3] * b[2];
-  q[2] = a[0] * b[2] - a[2] * b[0] - a[3] * b[1] + a[1] * b[3];
-  q[3] = a[0] * b[3] - a[3] * b[0] - a[1] * b[2] + a[2] * b[1];
-  rtcd_quaternion_matrix(q, f->rotation);
-  rtcd_quaternion_matrix(a, rt);
-  for (i = 0; i < 3; ++i) d[i] = source->position[i] - target->position[i];
+  rtcd_relative_pose(source, target, &relative);
+  rtcd_quaternion_matrix(relative.orientation, f->rotation);
   for (i = 0; i < 3; ++i) {
-    f->translation[i] = rt[i] * d[0] + rt[3 + i] * d[1] + rt[6 + i] * d[2];
+    f->translation[i] = relative.position[i];
     centre[i] = 0.5 * (source_bounds->lo[i] + source_bounds->hi[i]);
     extent[i] = 0.5 * (source_bounds->hi[i] - source_bounds->lo[i]);
   }

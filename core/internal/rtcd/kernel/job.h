@@ -61,35 +61,37 @@ typedef struct {
 
 /* RTCD_JOB_EDGES of a pair setup's direction d. */
 #define RTCD_PAIR_EDGES(d) (RTCD_JOB_EDGES << (d))
+/* The pair's motion is equation 2.1 from its bodies' poses of the last
+ * step to this step's (rtcd_pair_motion); else it is 0. */
+#define RTCD_PAIR_MOTION 8u
 
 /* One pair as the host decided it, both directions in one: direction 0
  * casts the first body's rays against the second, direction 1 the
- * second's against the first. The directions share the motion, the limits
- * (derived from the motion on the device) and the mode, and their items
- * follow one another, after the pair before's (a device scans the counts:
- * rtcd_first_items). The bodies' shapes are the device's already. 40
- * bytes. */
+ * second's against the first. The directions share the motion (derived on
+ * the device from the poses: rtcd_pair_motion), the limits derived from it
+ * and the mode, and their items follow one another, after the pair
+ * before's (a device scans the counts: rtcd_first_items). The bodies'
+ * shapes are the device's already. 32 bytes. */
 typedef struct {
-  double motion; /* in the last step: the m of the limits' rules (rtcd_derive_limits) */
   rtcd_uint bodies[2];
-  rtcd_uint flags; /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d) */
+  rtcd_uint flags; /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d), RTCD_PAIR_MOTION */
   float moved;     /* iterative pairs: since the pair's full step (equation 2.1), rounded up */
   rtcd_uint item_count[2];
   rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its near leaves */
 } rtcd_pair_setup;
 
-/* Direction d's setup, with the pair's limits derived from its motion, the
- * settings and its bodies' shapes' scales (bodies[0]'s shape and scale,
- * then bodies[1]'s: the rules are symmetric); `first_item` is direction
- * 0's. */
+/* Direction d's setup, with the pair's limits derived from its motion in
+ * the last step, the settings and its bodies' shapes' scales (bodies[0]'s
+ * shape and scale, then bodies[1]'s: the rules are symmetric);
+ * `first_item` is direction 0's. */
 RTCD_INLINE rtcd_job_setup rtcd_direction_setup(const rtcd_pair_setup* p, rtcd_uint d, rtcd_uint first_item,
-                                                rtcd_uint config,
+                                                double motion, rtcd_uint config,
                                                 const rtcd_limit_settings* settings, rtcd_uint shape_0,
                                                 rtcd_uint shape_1, const rtcd_shape_scale* scale_0,
                                                 const rtcd_shape_scale* scale_1) {
   rtcd_job_setup s;
   const int iterative = (p->flags & RTCD_JOB_ITERATIVE) != 0;
-  const rtcd_pair_limits limits = rtcd_derive_limits(settings, scale_0, scale_1, p->motion);
+  const rtcd_pair_limits limits = rtcd_derive_limits(settings, scale_0, scale_1, motion);
   s.extension = limits.distance_extension;
   s.reach = (config & RTCD_CONFIG_AUTOMATIC) ? limits.displacement_threshold : limits.distance_extension;
   s.moved = p->moved;
