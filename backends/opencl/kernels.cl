@@ -121,7 +121,7 @@ RTCD_INLINE void rtcd_merge_leaves(__global const rtcd_uint* near, __global cons
  * pair's motion (from its bodies' poses of the last step, `before`, to
  * this step's: rtcd_pair_motion), the configuration's limit settings and
  * its bodies' shapes' scales (rtcd_derive_limits), its parameters (rtcd_make_params) with its
- * first item (rtcd_first_items), and its frame from its bodies' poses
+ * first item (rtcd_offsets), and its frame from its bodies' poses
  * (rtcd_relative_frame); for a full job, the source items
  * (origins, then edges) of its near leaves, in item order, listed as its
  * items (the host counted them): a short list of leaves by merging their
@@ -276,56 +276,39 @@ RTCD_INLINE rtcd_uint rtcd_scan_shares(__local rtcd_uint* partial, rtcd_uint wid
   return sum;
 }
 
-/* The batch's ray list laid out on the device: each job's first ray (an
- * exclusive prefix sum of the counts) and, after the last job, the total,
- * which bounds rtcd_trace, so no count goes through the host before the
- * trace. One work-group. */
-__kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* first_rays) {
+/* Job j's count among `counts`: pairs of words (job 2p's, then 2p + 1's)
+ * `pair_stride` words apart from `first_word` on. */
+RTCD_INLINE rtcd_uint rtcd_job_count(__global const rtcd_uint* counts, rtcd_uint first_word, rtcd_uint pair_stride,
+                                     rtcd_uint j) {
+  return counts[first_word + j / 2 * pair_stride + j % 2];
+}
+
+/* Each job's first (an exclusive prefix sum of the jobs' counts) and,
+ * after the last job, the total: the batch's item list from the pairs'
+ * setups' item counts (first_word at rtcd_pair_setup::item_count, stride
+ * a setup's words), for rtcd_prepare, and its ray list from rtcd_count's
+ * counts (0, stride 2), which bounds rtcd_trace, so no count goes through
+ * the host. One work-group. */
+__kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* firsts,
+                           rtcd_uint first_word, rtcd_uint pair_stride) {
   __local rtcd_uint partial[RTCD_SCAN_WIDTH];
   const rtcd_uint lid = get_local_id(0), width = min((rtcd_uint)get_local_size(0), (rtcd_uint)RTCD_SCAN_WIDTH);
   rtcd_uint j, begin = 0, end = 0, n = 0;
   if (lid < width) {
     rtcd_scan_share(job_count, lid, width, &begin, &end);
-    for (j = begin; j < end; ++j) n += counts[j];
+    for (j = begin; j < end; ++j) n += rtcd_job_count(counts, first_word, pair_stride, j);
     partial[lid] = n;
   }
   barrier(CLK_LOCAL_MEM_FENCE);
-  if (lid == 0) first_rays[job_count] = rtcd_scan_shares(partial, width);
+  if (lid == 0) firsts[job_count] = rtcd_scan_shares(partial, width);
   barrier(CLK_LOCAL_MEM_FENCE);
   if (lid >= width) return;
   n = partial[lid];
   for (j = begin; j < end; ++j) {
-    first_rays[j] = n;
-    n += counts[j];
+    firsts[j] = n;
+    n += rtcd_job_count(counts, first_word, pair_stride, j);
   }
 }
-
-#ifdef RTCD_HAS_DOUBLE
-/* The batch's item list laid out on the device: each job's first item, an
- * exclusive prefix sum of the pairs' item counts (job 2p is direction 0
- * of pair p, job 2p + 1 direction 1), for rtcd_prepare. One work-group. */
-__kernel void rtcd_first_items(__global const rtcd_pair_setup* setups, rtcd_uint pair_count,
-                               __global rtcd_uint* first_items) {
-  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
-  const rtcd_uint lid = get_local_id(0), width = min((rtcd_uint)get_local_size(0), (rtcd_uint)RTCD_SCAN_WIDTH);
-  rtcd_uint p, begin = 0, end = 0, n = 0;
-  if (lid < width) {
-    rtcd_scan_share(pair_count, lid, width, &begin, &end);
-    for (p = begin; p < end; ++p) n += setups[p].item_count[0] + setups[p].item_count[1];
-    partial[lid] = n;
-  }
-  barrier(CLK_LOCAL_MEM_FENCE);
-  if (lid == 0) rtcd_scan_shares(partial, width);
-  barrier(CLK_LOCAL_MEM_FENCE);
-  if (lid >= width) return;
-  n = partial[lid];
-  for (p = begin; p < end; ++p) {
-    first_items[2 * p] = n;
-    first_items[2 * p + 1] = n + setups[p].item_count[0];
-    n += setups[p].item_count[0] + setups[p].item_count[1];
-  }
-}
-#endif
 
 /* One item: a candidate moves to its place in the batch's ray list. */
 __kernel void rtcd_scatter(__global const rtcd_uint* first_items, __global const rtcd_uint* first_rays,

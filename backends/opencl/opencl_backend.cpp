@@ -4,7 +4,7 @@
 // the device holding its tracked rays; the others go to the least loaded
 // by expected rays), each device with its own queue, and all devices run
 // at once:
-//   1. rtcd_first_items: the jobs' first items, a scan of the pairs' item
+//   1. rtcd_offsets: the jobs' first items, a scan of the pairs' item
 //      counts; rtcd_prepare: each job made from its pair's 32-byte setup
 //      (both directions: the pair's motion from the poses of the last step
 //      and this one, limits from it, parameters; the bodies' shapes are on
@@ -49,6 +49,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cstddef>
 #include <cstring>
 #include <iostream>
 #include <mutex>
@@ -69,13 +70,17 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
 static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 60 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
-static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 && sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
+static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 &&
+              sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
 static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 32 && alignof(rtcd_pair_setup) == 4 &&
               sizeof(rtcd_shape_scale) == 32 && sizeof(rtcd_limit_settings) == 24 &&
               sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
 
 constexpr size_t kGroupSize = 64;
+// Where rtcd_offsets reads the pairs' item counts among their setups' words.
+constexpr auto kSetupCountsWord = rtcd_uint(offsetof(rtcd_pair_setup, item_count) / sizeof(rtcd_uint));
+constexpr auto kSetupWords = rtcd_uint(sizeof(rtcd_pair_setup) / sizeof(rtcd_uint));
 // A kept outcome's vertex until its walk start is recovered.
 constexpr rtcd_uint kPlaceholder = ~rtcd_uint(0);
 
@@ -97,7 +102,8 @@ constexpr size_t kTracedShapeBuffers = kOrigins;
 // buffers they use. A step's two batches have a lane each, so the full
 // batch runs on the device while the walks are set up.
 struct Lane {
-  GrowingBuffer setups, jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays, outcomes;
+  GrowingBuffer setups, jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays,
+      outcomes;
   GrowingBuffer tallies, laid_out, summaries, total, reports;
   // The jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
@@ -135,7 +141,7 @@ struct Lane {
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel first_items, prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
+  cl::Kernel prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
@@ -190,7 +196,6 @@ class OpenClExecutor final : public RayExecutor {
         device.recovery = cl::CommandQueue(runtime_->context, d);
         for (auto& events : device.recovering) events.reserve(2);
         if (runtime_->place_on_device) {
-          device.first_items = cl::Kernel(runtime_->program, "rtcd_first_items");
           device.prepare = cl::Kernel(runtime_->program, "rtcd_prepare");
           device.select = cl::Kernel(runtime_->program, "rtcd_select");
           device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
@@ -204,9 +209,10 @@ class OpenClExecutor final : public RayExecutor {
         device.lay_out = cl::Kernel(runtime_->program, "rtcd_lay_out");
         device.group_size = kGroupSize;
         for (const cl::Kernel* k :
-             {&device.first_items, &device.prepare, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
+             {&device.prepare, &device.select, &device.count, &device.offsets, &device.scatter, &device.trace,
               &device.trace_items, &device.tallies, &device.total, &device.lay_out})
-          if ((*k)()) device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
+          if ((*k)())
+            device.group_size = std::min(device.group_size, k->getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(d));
         devices_.push_back(std::move(device));
       }
     } catch (const cl::Error& e) {
@@ -312,7 +318,8 @@ class OpenClExecutor final : public RayExecutor {
         ++(early ? d.early_waits : d.work.waits);
         status = e.getInfo<CL_EVENT_COMMAND_EXECUTION_STATUS>();
       }
-      if (status < 0) throw Error("a device could not read back its tracked rays (OpenCL status " + std::to_string(status) + ")");
+      if (status < 0)
+        throw Error("a device could not read back its tracked rays (OpenCL status " + std::to_string(status) + ")");
     }
   }
 
@@ -411,7 +418,9 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // A new command's event, to be timed once it has finished.
-  static cl::Event* timed(Device& d, bool kernel) { return &d.timed.emplace_back(Device::Timed{cl::Event(), kernel}).event; }
+  static cl::Event* timed(Device& d, bool kernel) {
+    return &d.timed.emplace_back(Device::Timed{cl::Event(), kernel}).event;
+  }
 
   // The host blocks until the command of `done` has finished.
   static void wait(Device& d, const cl::Event& done) {
@@ -822,7 +831,7 @@ class OpenClExecutor final : public RayExecutor {
     }
     write(d, lane.setups, lane.host_setups);
     reserve(lane.jobs, jobs_count * sizeof(rtcd_device_job));
-    reserve(lane.first_items, jobs_count * sizeof(rtcd_uint));
+    reserve(lane.first_items, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
     reserve(lane.frames, jobs_count * sizeof(rtcd_frame));
     // Tracked rays that were not kept here come from the host's mirror,
     // after the kept ones the walks read.
@@ -834,8 +843,8 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
     reserve(lane.near, 1);  // unread by walks
     if (!lane.host_jobs.front().params.iterative) write(d, lane.near, lane.host_near);
-    set_args(d.first_items, 0, lane.setups.buffer, jobs_count / 2, lane.first_items.buffer);
-    launch_group(d, d.first_items);
+    set_args(d.offsets, 0, lane.setups.buffer, jobs_count, lane.first_items.buffer, kSetupCountsWord, kSetupWords);
+    launch_group(d, d.offsets);
     cl::Kernel& p = d.prepare;
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
@@ -870,11 +879,8 @@ class OpenClExecutor final : public RayExecutor {
     c.setArg(4, lane.counts.buffer);
     launch(d, c, jobs_count);
     reserve(lane.first_rays, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
-    cl::Kernel& o = d.offsets;
-    o.setArg(0, lane.counts.buffer);
-    o.setArg(1, jobs_count);
-    o.setArg(2, lane.first_rays.buffer);
-    launch_group(d, o);
+    set_args(d.offsets, 0, lane.counts.buffer, jobs_count, lane.first_rays.buffer, rtcd_uint(0), rtcd_uint(2));
+    launch_group(d, d.offsets);
   }
 
   // The compacted layout on the device: candidates scattered and traced
@@ -1108,13 +1114,16 @@ class OpenClExecutor final : public RayExecutor {
         o.edge = k < s.kept_origins ? rtcd_uchar(RTCD_ITEM_ORIGIN) : edge_kind;
       }
       for (; report != reports_end && report->job == l; ++report) {
-        if (report->place >= s.kept) throw Error("a device returned a report out of place for job " + std::to_string(l));
+        if (report->place >= s.kept)
+          throw Error("a device returned a report out of place for job " + std::to_string(l));
         out[report->place] = report->outcome;
         tally.contacts += report->outcome.kind == RTCD_RAY_PENETRATING;
         tally.predictive += report->outcome.kind == RTCD_RAY_PREDICTIVE;
       }
-      if (job.residence)
-        *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true, uint32_t(tally.contacts + tally.predictive)};
+      if (job.residence) {
+        const auto made = uint32_t(tally.contacts + tally.predictive);
+        *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true, made};
+      }
     }
     if (report != reports_end) throw Error("a device returned a report out of its job's order");
   }

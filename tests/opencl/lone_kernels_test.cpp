@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 #include <random>
 #include <vector>
@@ -41,12 +42,15 @@ std::shared_ptr<const Runtime> runtime() {
 }
 
 // Scan kernel `name` over `jobs` jobs as the executor launches it: one
-// work-group; its arguments the first buffer, the job count, the others.
-void run_scan(const Runtime& rt, const char* name, size_t jobs, const std::vector<cl::Buffer>& buffers) {
+// work-group; its arguments the first buffer, the job count, the others,
+// then `words`.
+void run_scan(const Runtime& rt, const char* name, size_t jobs, const std::vector<cl::Buffer>& buffers,
+              const std::vector<rtcd_uint>& words = {}) {
   cl::Kernel k(rt.program, name);
   k.setArg(0, buffers[0]);
   k.setArg(1, rtcd_uint(jobs));
   for (size_t i = 1; i < buffers.size(); ++i) k.setArg(cl_uint(i + 1), buffers[i]);
+  for (size_t i = 0; i < words.size(); ++i) k.setArg(cl_uint(buffers.size() + 1 + i), words[i]);
   const cl::Device& device = rt.devices.front();
   const size_t group = std::min(kGroupSize, k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device));
   cl::CommandQueue queue(rt.context, device);
@@ -73,7 +77,7 @@ TEST(OpenClScans, OffsetsAreTheHostsPrefixSumAroundGroupMultiples) {
     std::vector<rtcd_uint> counts(jobs), first_rays(jobs + 1, 0xdeadbeef);
     for (rtcd_uint& c : counts) c = count(g);
     const cl::Buffer firsts_buffer = buffer_of(*rt, first_rays);
-    run_scan(*rt, "rtcd_offsets", jobs, {buffer_of(*rt, counts), firsts_buffer});
+    run_scan(*rt, "rtcd_offsets", jobs, {buffer_of(*rt, counts), firsts_buffer}, {0u, 2u});
     read_back(*rt, firsts_buffer, first_rays);
     rtcd_uint sum = 0;
     for (size_t j = 0; j < jobs; ++j) {
@@ -84,8 +88,9 @@ TEST(OpenClScans, OffsetsAreTheHostsPrefixSumAroundGroupMultiples) {
   }
 }
 
-// rtcd_first_items: job 2p (direction 0 of pair p) starts where the pairs
-// before it end, job 2p + 1 after direction 0's items.
+// rtcd_offsets over the pairs' setups: job 2p (direction 0 of pair p)
+// starts where the pairs before it end, job 2p + 1 after direction 0's
+// items.
 TEST(OpenClScans, FirstItemsAreTheHostsPrefixSumAroundGroupMultiples) {
   const auto rt = runtime();
   if (!rt->place_on_device) GTEST_FAIL() << "the device lacks fp64: the host lays out the items there";
@@ -95,9 +100,11 @@ TEST(OpenClScans, FirstItemsAreTheHostsPrefixSumAroundGroupMultiples) {
     SCOPED_TRACE(std::to_string(pairs) + " pairs");
     std::vector<rtcd_pair_setup> setups(pairs);
     for (rtcd_pair_setup& p : setups) p = {{0, 0}, 0u, 0.0f, {count(g), count(g)}, {0, 0}};
-    std::vector<rtcd_uint> first_items(2 * pairs, 0xdeadbeef);
+    std::vector<rtcd_uint> first_items(2 * pairs + 1, 0xdeadbeef);
     const cl::Buffer firsts_buffer = buffer_of(*rt, first_items);
-    run_scan(*rt, "rtcd_first_items", pairs, {buffer_of(*rt, setups), firsts_buffer});
+    const auto counts_word = rtcd_uint(offsetof(rtcd_pair_setup, item_count) / 4);
+    run_scan(*rt, "rtcd_offsets", 2 * pairs, {buffer_of(*rt, setups), firsts_buffer},
+             {counts_word, rtcd_uint(sizeof(rtcd_pair_setup) / 4)});
     read_back(*rt, firsts_buffer, first_items);
     rtcd_uint sum = 0;
     for (size_t p = 0; p < pairs; ++p) {
@@ -105,6 +112,7 @@ TEST(OpenClScans, FirstItemsAreTheHostsPrefixSumAroundGroupMultiples) {
       ASSERT_EQ(first_items[2 * p + 1], sum + setups[p].item_count[0]) << "pair " << p;
       sum += setups[p].item_count[0] + setups[p].item_count[1];
     }
+    EXPECT_EQ(first_items[2 * pairs], sum);
   }
 }
 
@@ -230,7 +238,7 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     p.first[1] = word(g);
   }
   std::vector<rtcd_device_shape> table(kShapes);
-  // Each pair's items after the last's, as rtcd_first_items lays them out.
+  // Each pair's items after the last's, as rtcd_offsets lays them out.
   std::vector<rtcd_uint> unused(1), first_items(kJobs);
   for (size_t j = 0, n = 0; j < kJobs; n += pairs[j / 2].item_count[j % 2], ++j) first_items[j] = rtcd_uint(n);
   std::vector<rtcd_device_job> jobs(kJobs);

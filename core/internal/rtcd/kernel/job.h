@@ -70,7 +70,7 @@ typedef struct {
  * second's against the first. The directions share the motion (derived on
  * the device from the poses: rtcd_pair_motion), the limits derived from it
  * and the mode, and their items follow one another, after the pair
- * before's (a device scans the counts: rtcd_first_items). The bodies'
+ * before's (a device scans the counts: rtcd_offsets). The bodies'
  * shapes are the device's already. 32 bytes. */
 typedef struct {
   rtcd_uint bodies[2];
