@@ -13,18 +13,29 @@
 #ifdef RTCD_HAS_DOUBLE
 /* atan(y / x) for y, x >= 0, not both 0, in [0, pi / 2], within 8 ulp of
  * the library's (criterion_test): the ratio (at most 1, or its inverse
- * from pi / 2) is halved in angle three times by atan(r) = 2 atan(r / (1 +
- * sqrt(1 + r^2))), to below tan(pi / 32) < 0.1, where eleven terms of the
- * odd series are exact to double precision. */
+ * from pi / 2) is halved in angle by atan(r) = 2 atan(r / (1 + sqrt(1 +
+ * r^2))) until it is at most 0.1 (three times at most; a resting pair's
+ * never), where eleven terms of the odd series are exact to double
+ * precision. */
 RTCD_INLINE double rtcd_atan_ratio(double y, double x) {
   const int inverted = y > x;
-  double r = inverted ? x / y : y / x, r2, sum;
-  int i;
-  for (i = 0; i < 3; ++i) r = r / (1.0 + sqrt(1.0 + r * r));
+  double r = inverted ? x / y : y / x, scale = 1.0, r2, sum;
+  while (r > 0.1) {
+    r = r / (1.0 + sqrt(1.0 + r * r));
+    scale *= 2.0;
+  }
   r2 = r * r;
-  sum = 1.0 / 21.0;
-  for (i = 9; i >= 0; --i) sum = 1.0 / (double)(2 * i + 1) - r2 * sum;
-  r = 8.0 * (r * sum);
+  sum = 1.0 / 19.0 - r2 * (1.0 / 21.0);
+  sum = 1.0 / 17.0 - r2 * sum;
+  sum = 1.0 / 15.0 - r2 * sum;
+  sum = 1.0 / 13.0 - r2 * sum;
+  sum = 1.0 / 11.0 - r2 * sum;
+  sum = 1.0 / 9.0 - r2 * sum;
+  sum = 1.0 / 7.0 - r2 * sum;
+  sum = 1.0 / 5.0 - r2 * sum;
+  sum = 1.0 / 3.0 - r2 * sum;
+  sum = 1.0 - r2 * sum;
+  r = scale * (r * sum);
   return inverted ? 1.5707963267948966 - r : r;
 }
 
