@@ -619,7 +619,8 @@ class OpenClExecutor final : public RayExecutor {
     const RaySources& rs = shapes_[job.source]->sources();
     lane.leaves.clear();
     size_t items = 0;
-    visit_near_leaves(job, rs, shapes_[job.target]->distance_bound(), edge_reach(dj.params), [&](uint32_t n) {
+    const DistanceBound& bound = shapes_[job.target]->distance_bound();
+    visit_near_leaves(make_frame(job), rs, bound, edge_reach(dj.params), [&](uint32_t n) {
       lane.leaves.push_back(n);
       items += rs.items_of(n).size();
     });

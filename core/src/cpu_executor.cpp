@@ -204,7 +204,7 @@ class CpuExecutor final : public RayExecutor {
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_frame frame = make_frame(job);
     marks.assign((rs.item_count() + 63) / 64, 0);
-    visit_near_items(job, rs, shapes_[job.target]->distance_bound(), edge_reach(params),
+    visit_near_items(frame, rs, shapes_[job.target]->distance_bound(), edge_reach(params),
                      [&](uint32_t v) { marks[v / 64] |= uint64_t(1) << (v % 64); });
     for (size_t w = 0; w < marks.size(); ++w)
       for (uint64_t bits = marks[w]; bits != 0; bits &= bits - 1)

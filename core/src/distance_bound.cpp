@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 
+#include "rtcd/near_search.hpp"
 #include "rtcd/shape.hpp"
 
 namespace rtcd {
@@ -45,10 +46,6 @@ float floor_float(double v) {
   float f = float(v);
   if (double(f) > v) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
   return f;
-}
-
-double box_distance(const Aabb& box, const Eigen::Vector3d& p) {
-  return (box.min - p).cwiseMax(p - box.max).cwiseMax(0.0).norm();
 }
 
 }  // namespace
@@ -151,31 +148,28 @@ DistanceBound::DistanceBound(const Shape& shape) {
   }
 }
 
-double DistanceBound::lower(const Eigen::Vector3d& p) const {
-  switch (kind_) {
-    case Kind::sphere: return std::abs(p.norm() - radius_);
-    case Kind::half_space: return std::abs(p.z());
-    case Kind::box: {
-      const Eigen::Vector3d q = p.cwiseAbs() - bounds_.max;
-      return (q.array() > 0).any() ? q.cwiseMax(0.0).norm() : -q.maxCoeff();
-    }
-    case Kind::grid: break;
-  }
-  const double outside = box_distance(bounds_, p);
-  const Eigen::Vector3d g = (p - origin_) / cell_;
-  std::array<int, 3> c;
+rtcd_distance_grid DistanceBoundKernel::grid(const DistanceBound& b) {
+  rtcd_distance_grid g{};
+  using Kind = DistanceBound::Kind;
+  g.kind = b.kind_ == Kind::sphere      ? RTCD_BOUND_SPHERE
+           : b.kind_ == Kind::box       ? RTCD_BOUND_BOX
+           : b.kind_ == Kind::half_space ? RTCD_BOUND_HALF_SPACE
+                                        : RTCD_BOUND_GRID;
   for (int a = 0; a < 3; ++a) {
-    if (!(g[a] >= 0.0 && g[a] <= nodes_[a] - 1)) return outside;  // beyond the grid (or NaN)
-    c[a] = std::min(int(g[a]), nodes_[a] - 2);
+    g.lo[a] = b.bounds_.min[a];
+    g.hi[a] = b.bounds_.max[a];
+    g.origin[a] = b.origin_[a];
+    g.nodes[a] = b.nodes_[a];
   }
-  double best = outside;
-  for (int k = 0; k < 8; ++k) {
-    const int x = c[0] + (k & 1), y = c[1] + ((k >> 1) & 1), z = c[2] + ((k >> 2) & 1);
-    const Eigen::Vector3d n = origin_ + cell_ * Eigen::Vector3d(x, y, z);
-    best = std::max(best, double(at(x, y, z)) - (p - n).norm());
-  }
-  // The lookup's own rounding.
-  return best - 1e-9 * cell_;
+  g.radius = b.radius_;
+  g.cell = b.cell_;
+  return g;
+}
+
+// The kernel's bound (kernel/near.h), which the devices' searches read too.
+double DistanceBound::lower(const Eigen::Vector3d& p) const {
+  const rtcd_distance_grid g = DistanceBoundKernel::grid(*this);
+  return rtcd_distance_lower(&g, values_.data(), p.data());
 }
 
 }  // namespace rtcd

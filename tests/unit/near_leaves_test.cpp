@@ -53,7 +53,7 @@ TEST(NearLeaves, EdgesFarFromTheSurfaceAreTurnedAwayAndNoneWithinReach) {
     job.overlap = target.bounds().intersection(source.bounds().transformed(job.rotation, job.translation)).grown(0.05);
     const double reach = 0.02;
     std::vector<char> seen(rs.item_count(), 0);
-    visit_near_items(job, rs, bound, reach, [&](uint32_t item) { seen[item] = 1; });
+    visit_near_items(make_frame(job), rs, bound, reach, [&](uint32_t item) { seen[item] = 1; });
     for (uint32_t e = rs.first_edge(); e < rs.item_count(); ++e) {
       const auto& ends = rs.edges[e - rs.first_edge()];
       const Eigen::Vector3d p = job.rotation * rs.origins[ends[0]].cast<double>() + job.translation;
@@ -70,7 +70,7 @@ TEST(NearLeaves, EdgesFarFromTheSurfaceAreTurnedAwayAndNoneWithinReach) {
     }
     // A job that tests no edge visits none.
     std::fill(seen.begin(), seen.end(), 0);
-    visit_near_items(job, rs, bound, -1.0, [&](uint32_t item) { seen[item] = 1; });
+    visit_near_items(make_frame(job), rs, bound, -1.0, [&](uint32_t item) { seen[item] = 1; });
     for (uint32_t e = rs.first_edge(); e < rs.item_count(); ++e) ASSERT_FALSE(seen[e]);
   }
   EXPECT_GT(within, 100u) << "poses in contact";

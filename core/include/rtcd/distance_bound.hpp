@@ -58,7 +58,8 @@ class DistanceBound {
   std::array<int, 3> nodes_{0, 0, 0};
   std::vector<float> values_;  // x fastest
 
-  float at(int x, int y, int z) const { return values_[(size_t(z) * nodes_[1] + y) * nodes_[0] + x]; }
+  // Reads the members for the kernel's search (kernel/near.h), which is this bound.
+  friend struct DistanceBoundKernel;
 };
 
 RTCD_PUBLIC_END

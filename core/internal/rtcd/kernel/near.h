@@ -1,0 +1,191 @@
+/* Which leaves of a source's tree a full job lists, and the distance bound
+ * that search reads: one search that the CPU executors and the OpenCL host
+ * run, so all take the same items, and one bound that
+ * DistanceBound::lower is; in the kernel's C, so a device could run them
+ * to the same bits (docs/decisions.md: not yet, while the host counts).
+ * Contraction is off; sqrt is correctly rounded on both sides. */
+#ifndef RTCD_KERNEL_NEAR_H
+#define RTCD_KERNEL_NEAR_H
+
+#include "frame.h"
+#include "tracer.h"
+
+/* A node of a source's tree: RaySources::Node's layout. An inner node's
+ * children are nodes child and child + 1; child 0 marks a leaf. */
+typedef struct {
+  float lo[3], hi[3];
+  rtcd_uint begin, end; /* its items: order[begin, end) */
+  rtcd_uint child;
+} rtcd_source_node;
+
+/* What a source's tree is searched with: its nodes, the items in tree
+ * order (each leaf's in any order), where its edges begin, whether it is a
+ * sphere (no edges; its deepest point is an item). */
+typedef struct {
+  RTCD_GLOBAL const rtcd_source_node* nodes;
+  RTCD_GLOBAL const rtcd_uint* order;
+  rtcd_uint node_count;
+  rtcd_uint first_edge;
+  int sphere;
+} rtcd_source_tree;
+
+#ifdef RTCD_HAS_DOUBLE
+/* rtcd_distance_grid::kind */
+#define RTCD_BOUND_GRID 0
+#define RTCD_BOUND_SPHERE 1
+#define RTCD_BOUND_BOX 2
+#define RTCD_BOUND_HALF_SPACE 3
+
+/* A shape's distance bound as DistanceBound holds it, its grid's values apart. */
+typedef struct {
+  double lo[3], hi[3]; /* a mesh's box; a box's [-h, h] */
+  double origin[3];    /* a grid's node (0, 0, 0) */
+  double radius;       /* a sphere's */
+  double cell;         /* a grid's */
+  rtcd_int kind;       /* RTCD_BOUND_* */
+  rtcd_int nodes[3];   /* a grid's nodes per axis, x fastest */
+} rtcd_distance_grid;
+
+RTCD_INLINE double rtcd_norm3(double x, double y, double z) { return sqrt(x * x + y * y + z * z); }
+
+/* A lower bound on the distance from p (the shape's frame) to its surface
+ * (DistanceBound::lower): closed forms for volumes; for a mesh, the max
+ * over p's cell's 8 nodes of the node's value less its distance to p, and
+ * never less than p's distance to the mesh's box. */
+RTCD_INLINE double rtcd_distance_lower(const rtcd_distance_grid* g, RTCD_GLOBAL const float* values,
+                                       const double p[3]) {
+  double q[3], outside, best, m;
+  int c[3], a, k;
+  if (g->kind == RTCD_BOUND_SPHERE) return rtcd_abs_d(rtcd_norm3(p[0], p[1], p[2]) - g->radius);
+  if (g->kind == RTCD_BOUND_HALF_SPACE) return rtcd_abs_d(p[2]);
+  if (g->kind == RTCD_BOUND_BOX) {
+    for (a = 0; a < 3; ++a) q[a] = rtcd_abs_d(p[a]) - g->hi[a];
+    if (q[0] > 0.0 || q[1] > 0.0 || q[2] > 0.0)
+      return rtcd_norm3(q[0] < 0.0 ? 0.0 : q[0], q[1] < 0.0 ? 0.0 : q[1], q[2] < 0.0 ? 0.0 : q[2]);
+    m = q[0] < q[1] ? q[1] : q[0];
+    return -(m < q[2] ? q[2] : m);
+  }
+  for (a = 0; a < 3; ++a) {
+    m = g->lo[a] - p[a] < p[a] - g->hi[a] ? p[a] - g->hi[a] : g->lo[a] - p[a];
+    q[a] = m < 0.0 ? 0.0 : m;
+  }
+  outside = rtcd_norm3(q[0], q[1], q[2]);
+  for (a = 0; a < 3; ++a) {
+    const double at = (p[a] - g->origin[a]) / g->cell;
+    if (!(at >= 0.0 && at <= (double)(g->nodes[a] - 1))) return outside; /* beyond the grid (or NaN) */
+    c[a] = (int)at < g->nodes[a] - 2 ? (int)at : g->nodes[a] - 2;
+  }
+  best = outside;
+  for (k = 0; k < 8; ++k) {
+    const int x = c[0] + (k & 1), y = c[1] + ((k >> 1) & 1), z = c[2] + ((k >> 2) & 1);
+    const double value = (double)values[((rtcd_ulong)z * (rtcd_ulong)g->nodes[1] + (rtcd_ulong)y) *
+                                            (rtcd_ulong)g->nodes[0] + (rtcd_ulong)x];
+    const double d = value - rtcd_norm3(p[0] - (g->origin[0] + g->cell * (double)x),
+                                        p[1] - (g->origin[1] + g->cell * (double)y),
+                                        p[2] - (g->origin[2] + g->cell * (double)z));
+    best = best < d ? d : best;
+  }
+  return best - 1e-9 * g->cell; /* the lookup's own rounding */
+}
+
+#define RTCD_NEAR_STACK 64 /* depth <= log2(origins) + 1 for median splits */
+#define RTCD_NO_LEAF 0xffffffffu
+
+/* A job's search for the leaves of its source's tree whose box, placed in
+ * the target's frame as the box around it (in double, grown well past
+ * rounding), meets the job's candidate box; a node of edges is turned away
+ * too when the target's distance bound at its centre, less half its box's
+ * diagonal, puts every edge in it beyond `reach` of the surface (negative:
+ * the job tests no edge). */
+typedef struct {
+  double rotation[9], spread[9], translation[3];
+  double lo[3], hi[3];
+  double reach, beyond;
+  rtcd_uint stack[RTCD_NEAR_STACK];
+  int top;
+} rtcd_near_search;
+
+/* How far from the target's surface a full job's edges are still worth
+ * testing: those that cannot cross it now are dropped, and of the others
+ * only those within the watch reach are kept for later walks
+ * (rtcd_watch_edge), which stop once the pair has moved that far.
+ * Negative: the job tests no edge. */
+RTCD_INLINE double rtcd_edge_reach(const rtcd_trace_params* p) {
+  return !p->edges ? -1.0 : p->watch ? (double)p->reach : 0.0;
+}
+
+RTCD_INLINE double rtcd_max_abs3(const double v[3]) {
+  const double a = rtcd_abs_d(v[0]), b = rtcd_abs_d(v[1]), c = rtcd_abs_d(v[2]);
+  const double m = a < b ? b : a;
+  return m < c ? c : m;
+}
+
+/* The search of the job framed by f (its transform and candidate box). */
+RTCD_INLINE void rtcd_near_begin(rtcd_near_search* s, const rtcd_frame* f, double reach,
+                                 const rtcd_source_tree* tree) {
+  const double scale = 1.0 + rtcd_norm3(f->translation[0], f->translation[1], f->translation[2]) +
+                       rtcd_max_abs3(f->lo) + rtcd_max_abs3(f->hi);
+  int i;
+  for (i = 0; i < 9; ++i) {
+    s->rotation[i] = f->rotation[i];
+    s->spread[i] = rtcd_abs_d(f->rotation[i]);
+  }
+  for (i = 0; i < 3; ++i) {
+    s->translation[i] = f->translation[i];
+    s->lo[i] = f->lo[i] - 1e-9 * scale;
+    s->hi[i] = f->hi[i] + 1e-9 * scale;
+  }
+  s->reach = reach;
+  s->beyond = reach + 1e-6 * scale; /* far above the float rounding of the kernel's edge tests */
+  s->top = 0;
+  if (tree->node_count > 0 && !(f->lo[0] > f->hi[0] || f->lo[1] > f->hi[1] || f->lo[2] > f->hi[2]))
+    s->stack[s->top++] = 0;
+}
+
+/* Whether node n's items may include a candidate of the search's job. */
+RTCD_INLINE int rtcd_near_may_hold(const rtcd_near_search* s, const rtcd_source_tree* tree,
+                                   const rtcd_distance_grid* target, RTCD_GLOBAL const float* values,
+                                   const rtcd_source_node* n) {
+  double mid[3], extent[3], centre[3], h; /* (`half` is a type in OpenCL C) */
+  int i;
+  for (i = 0; i < 3; ++i) {
+    mid[i] = 0.5 * ((double)n->lo[i] + (double)n->hi[i]);
+    extent[i] = 0.5 * (double)(n->hi[i] - n->lo[i]);
+  }
+  for (i = 0; i < 3; ++i) {
+    const double* r = s->rotation + 3 * i;
+    const double* a = s->spread + 3 * i;
+    centre[i] = r[0] * mid[0] + r[1] * mid[1] + r[2] * mid[2] + s->translation[i];
+    h = a[0] * extent[0] + a[1] * extent[1] + a[2] * extent[2];
+    if (!(centre[i] + h >= s->lo[i]) || !(centre[i] - h <= s->hi[i])) return 0;
+  }
+  /* edges only: no origin, no sphere item */
+  if (tree->sphere || !(n->begin < n->end && tree->order[n->begin] >= tree->first_edge &&
+                        tree->order[n->end - 1] >= tree->first_edge))
+    return 1;
+  return s->reach >= 0.0 &&
+         !(rtcd_distance_lower(target, values, centre) >
+           0.5 * rtcd_norm3((double)(n->hi[0] - n->lo[0]), (double)(n->hi[1] - n->lo[1]),
+                            (double)(n->hi[2] - n->lo[2])) +
+               s->beyond);
+}
+
+/* The search's next leaf, or RTCD_NO_LEAF: each leaf at most once. */
+RTCD_INLINE rtcd_uint rtcd_near_next(rtcd_near_search* s, const rtcd_source_tree* tree,
+                                     const rtcd_distance_grid* target, RTCD_GLOBAL const float* values) {
+  while (s->top > 0) {
+    const rtcd_uint index = s->stack[--s->top];
+    const rtcd_source_node n = tree->nodes[index];
+    if (!rtcd_near_may_hold(s, tree, target, values, &n)) continue;
+    if (n.child != 0) {
+      s->stack[s->top++] = n.child;
+      s->stack[s->top++] = n.child + 1;
+      continue;
+    }
+    return index;
+  }
+  return RTCD_NO_LEAF;
+}
+#endif
+
+#endif
