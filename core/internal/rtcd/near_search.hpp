@@ -1,6 +1,6 @@
 // The kernel's search for a full job's near leaves and its distance bound
 // (kernel/near.h) over the host's shapes: one search for the CPU
-// executors, the OpenCL host and the devices.
+// executors and the OpenCL host.
 #pragma once
 
 #include <cstddef>
@@ -16,7 +16,6 @@ namespace rtcd {
 struct DistanceBoundKernel {
   static rtcd_distance_grid grid(const DistanceBound& bound);
   static const float* values(const DistanceBound& bound) { return bound.values_.data(); }
-  static size_t value_count(const DistanceBound& bound) { return bound.values_.size(); }
 };
 
 // The kernel reads RaySources::Node in place.
