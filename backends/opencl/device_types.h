@@ -75,6 +75,25 @@ RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint leaf
   return lo < 1 + near[0] && near[lo] == leaf;
 }
 
+/* rtcd_pair_setup's words, and where its item counts are among them. */
+#define RTCD_PAIR_SETUP_WORDS 8u
+#define RTCD_PAIR_COUNTS_WORD 4u
+
+/* A walking pair as a device's batch lists it (rtcd_pair_list): with
+ * RTCD_PAIR_RESIDENT among its flags, a pair that walks the rays it kept on
+ * this device last step, whole: its setup is row `slot` of last step's pair
+ * table, with these flags and this motion. Else its setup is the batch's
+ * `slot`th sent after the references. 12 bytes. */
+typedef struct {
+  rtcd_uint slot;
+  rtcd_uint flags; /* rtcd_pair_setup's, and RTCD_PAIR_RESIDENT */
+  float moved;
+} rtcd_pair_ref;
+#define RTCD_PAIR_REF_WORDS 3u
+#define RTCD_PAIR_RESIDENT 16u
+/* A batch whose setups the host made writes no pair table row. */
+#define RTCD_NO_SLOT 0xffffffffu
+
 /* A tracked ray on a device: the walk-start fields of the rtcd_outcome that kept it. */
 typedef struct {
   rtcd_uint vertex;

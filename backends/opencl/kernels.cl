@@ -284,14 +284,10 @@ RTCD_INLINE rtcd_uint rtcd_job_count(__global const rtcd_uint* counts, rtcd_uint
 }
 
 /* Each job's first (an exclusive prefix sum of the jobs' counts) and,
- * after the last job, the total: the batch's item list from the pairs'
- * setups' item counts (first_word at rtcd_pair_setup::item_count, stride
- * a setup's words), for rtcd_prepare, and its ray list from rtcd_count's
- * counts (0, stride 2), which bounds rtcd_trace, so no count goes through
- * the host. One work-group. */
-__kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* firsts,
-                           rtcd_uint first_word, rtcd_uint pair_stride) {
-  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+ * after the last job, the total, by the work-group's first RTCD_SCAN_WIDTH
+ * work-items (`partial` their local sums). */
+RTCD_INLINE void rtcd_scan_counts(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* firsts,
+                                  rtcd_uint first_word, rtcd_uint pair_stride, __local rtcd_uint* partial) {
   const rtcd_uint lid = get_local_id(0), width = min((rtcd_uint)get_local_size(0), (rtcd_uint)RTCD_SCAN_WIDTH);
   rtcd_uint j, begin = 0, end = 0, n = 0;
   if (lid < width) {
@@ -308,6 +304,50 @@ __kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count
     firsts[j] = n;
     n += rtcd_job_count(counts, first_word, pair_stride, j);
   }
+}
+
+/* The batch's ray list from rtcd_count's counts (first_word 0, stride 2),
+ * which bounds rtcd_trace, so no count goes through the host. One
+ * work-group. */
+__kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* firsts,
+                           rtcd_uint first_word, rtcd_uint pair_stride) {
+  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+  rtcd_scan_counts(counts, job_count, firsts, first_word, pair_stride, partial);
+}
+
+/* The batch's pairs' setups (rtcd_prepare reads them) from what the host
+ * sent, `list`: its setups, or, for a walking batch (ref_count pairs), a
+ * reference a pair and the setups the references without
+ * RTCD_PAIR_RESIDENT name; a resident pair's setup is its row of the last
+ * step's pair table (`before`: its bodies and its kept rays, which it walks
+ * whole) with the reference's flags and motion. Then the batch's item list
+ * from the setups' item counts, as rtcd_offsets. One work-group. */
+__kernel void rtcd_pair_list(__global const rtcd_uint* list, rtcd_uint job_count, rtcd_uint ref_count,
+                             __global const rtcd_pair_setup* before, __global rtcd_pair_setup* setups,
+                             __global rtcd_uint* first_items) {
+  __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+  __global const rtcd_pair_ref* refs = (__global const rtcd_pair_ref*)list;
+  __global const rtcd_pair_setup* sent = (__global const rtcd_pair_setup*)(list + ref_count * RTCD_PAIR_REF_WORDS);
+  rtcd_uint p;
+  for (p = get_local_id(0); p < job_count / 2; p += get_local_size(0)) {
+    rtcd_pair_setup s;
+    if (ref_count == 0) {
+      s = sent[p];
+    } else {
+      const rtcd_pair_ref r = refs[p];
+      if (r.flags & RTCD_PAIR_RESIDENT) {
+        s = before[r.slot];
+        s.flags = r.flags & ~RTCD_PAIR_RESIDENT;
+        s.moved = r.moved;
+      } else {
+        s = sent[r.slot];
+      }
+    }
+    setups[p] = s;
+  }
+  barrier(CLK_GLOBAL_MEM_FENCE);
+  rtcd_scan_counts((__global const rtcd_uint*)setups, job_count, first_items,
+                   RTCD_PAIR_COUNTS_WORD, RTCD_PAIR_SETUP_WORDS, partial);
 }
 
 /* One item: a candidate moves to its place in the batch's ray list. */
@@ -499,18 +539,33 @@ __kernel void rtcd_total(__global const rtcd_tally* tallies, rtcd_uint job_count
  * where the next step's walks read them, so they stay on the device; and
  * those that report (contacts and predictive rays), in order, each with
  * its job and its place among the job's kept rays, so the host reads these
- * whole and the kept rays only for recovery. */
+ * whole and the kept rays only for recovery. Where the device made the
+ * setups, its pair's row of the step's pair table (from slot_base on): the
+ * bodies, and the direction's kept rays, first and count, for next step's
+ * walks (rtcd_pair_list). */
 __kernel void rtcd_lay_out(__global const rtcd_device_job* jobs, rtcd_uint job_count, rtcd_uint grid,
                            __global const rtcd_uint* firsts, __global const rtcd_uint* counts,
                            __global const rtcd_uchar* flags, __global const rtcd_outcome* outcomes,
                            __global const rtcd_uint* laid_out, rtcd_uint kept_base, __global rtcd_tracked* kept,
-                           __global rtcd_report* reports) {
+                           __global rtcd_report* reports, __global const rtcd_pair_setup* setups,
+                           rtcd_uint slot_base, __global rtcd_pair_setup* table) {
   rtcd_uint j = get_global_id(0);
   rtcd_uint first, end, k, place = 0;
   __global rtcd_tracked* keep;
   __global rtcd_report* report;
   if (j >= job_count) return;
   RTCD_JOB_RAYS(j, grid, firsts, counts);
+  if (slot_base != RTCD_NO_SLOT) {
+    __global rtcd_pair_setup* row = table + slot_base + j / 2;
+    if (j % 2 == 0) {
+      row->bodies[0] = setups[j / 2].bodies[0];
+      row->bodies[1] = setups[j / 2].bodies[1];
+      row->flags = 0;
+      row->moved = 0.0f;
+    }
+    row->item_count[j % 2] = laid_out[j + 1] - laid_out[j];
+    row->first[j % 2] = kept_base + laid_out[j];
+  }
   keep = kept + kept_base + laid_out[j];
   report = reports + laid_out[job_count + 1 + j];
   for (k = first; k < end; ++k) {

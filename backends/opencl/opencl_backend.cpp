@@ -77,10 +77,12 @@ static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 32 && a
               sizeof(rtcd_pose) == 56 &&
               sizeof(rtcd_box) == 48 && sizeof(rtcd_shape_traits) == 16);
 
+static_assert(RTCD_PAIR_SETUP_WORDS * sizeof(rtcd_uint) == sizeof(rtcd_pair_setup) &&
+              RTCD_PAIR_COUNTS_WORD * sizeof(rtcd_uint) == offsetof(rtcd_pair_setup, item_count) &&
+              RTCD_PAIR_REF_WORDS * sizeof(rtcd_uint) == sizeof(rtcd_pair_ref) && alignof(rtcd_pair_ref) == 4 &&
+              RTCD_NO_SLOT == Residence::kNoRecord);
+
 constexpr size_t kGroupSize = 64;
-// Where rtcd_offsets reads the pairs' item counts among their setups' words.
-constexpr auto kSetupCountsWord = rtcd_uint(offsetof(rtcd_pair_setup, item_count) / sizeof(rtcd_uint));
-constexpr auto kSetupWords = rtcd_uint(sizeof(rtcd_pair_setup) / sizeof(rtcd_uint));
 // A kept outcome's vertex until its walk start is recovered.
 constexpr rtcd_uint kPlaceholder = ~rtcd_uint(0);
 
@@ -102,7 +104,7 @@ constexpr size_t kTracedShapeBuffers = kOrigins;
 // buffers they use. A step's two batches have a lane each, so the full
 // batch runs on the device while the walks are set up.
 struct Lane {
-  GrowingBuffer setups, jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays,
+  GrowingBuffer list, setups, jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays,
       outcomes;
   GrowingBuffer tallies, laid_out, summaries, total, reports;
   // The jobs it runs (batch indices) and their host-side data.
@@ -110,6 +112,12 @@ struct Lane {
   std::vector<rtcd_device_job> host_jobs;
   std::vector<rtcd_uint> host_first_items, host_counts, host_first_rays;
   std::vector<rtcd_pair_setup> host_setups;  // the device makes the jobs and frames from them (rtcd_prepare)
+  // A walking batch's pairs as it sends them (rtcd_pair_list): a reference
+  // a pair, then the setups of those not resident; `list` the words sent.
+  std::vector<rtcd_pair_ref> host_refs;
+  std::vector<rtcd_uint> host_list;
+  uint32_t setups_sent = 0;            // after the references
+  uint32_t slot_base = RTCD_NO_SLOT;  // its pairs' rows in the step's pair table
   std::vector<rtcd_frame> host_frames;      // the host places the rays: it makes the frames
   std::vector<rtcd_uint> host_near;  // full jobs' near leaves (rtcd_near_leaf)
   std::vector<rtcd_uint> leaves;     // a job's near leaves, while it is added
@@ -141,7 +149,7 @@ struct Lane {
 
 struct Device {
   cl::CommandQueue queue;
-  cl::Kernel prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
+  cl::Kernel pair_list, prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
   // Shape data, by ShapeBuffer.
   std::vector<cl::Buffer> shapes;
   size_t shapes_uploaded = 0;
@@ -157,6 +165,11 @@ struct Device {
   // elsewhere (the host's mirror) appended there.
   GrowingBuffer kept[2];
   uint32_t kept_used[2] = {0, 0};  // room used in each: a compacted batch takes its items' worth
+  // The pairs' rows (rtcd_pair_setup: bodies, each direction's kept rays),
+  // by step parity as `kept`: a walking pair resident here is sent as a
+  // reference to its row of the last step (rtcd_pair_ref).
+  GrowingBuffer pair_table[2];
+  uint32_t rows_used[2] = {0, 0};
   DeviceWork work;  // this step's, over its batches
   // Commands whose device time is not counted yet (profiling events, kernel
   // or copy); kept until seen finished.
@@ -196,6 +209,7 @@ class OpenClExecutor final : public RayExecutor {
         device.recovery = cl::CommandQueue(runtime_->context, d);
         for (auto& events : device.recovering) events.reserve(2);
         if (runtime_->place_on_device) {
+          device.pair_list = cl::Kernel(runtime_->program, "rtcd_pair_list");
           device.prepare = cl::Kernel(runtime_->program, "rtcd_prepare");
           device.select = cl::Kernel(runtime_->program, "rtcd_select");
           device.trace_items = cl::Kernel(runtime_->program, "rtcd_trace_items");
@@ -238,6 +252,7 @@ class OpenClExecutor final : public RayExecutor {
     on_cpu_ = false;
     for (Device& d : devices_) {
       d.kept_used[step_ % 2] = 0;
+      d.rows_used[step_ % 2] = 0;
       d.work = {};
       d.work.waits = std::exchange(d.early_waits, 0);
     }
@@ -408,13 +423,14 @@ class OpenClExecutor final : public RayExecutor {
     b.bytes = bytes;
   }
 
-  // Tracked rays to `count` in all, the first `used` kept (copied on the
-  // device when the buffer grows).
-  void reserve_tracked(Device& d, GrowingBuffer& b, size_t count, size_t used) {
-    if (std::max<size_t>(count * sizeof(rtcd_tracked), 64) <= b.bytes) return;
+  // Room for `count` records of T in all, the first `used` kept (copied on
+  // the device when the buffer grows).
+  template <class T>
+  void reserve_keeping(Device& d, GrowingBuffer& b, size_t count, size_t used) {
+    if (std::max<size_t>(count * sizeof(T), 64) <= b.bytes) return;
     const cl::Buffer old = b.buffer;
-    reserve(b, count * sizeof(rtcd_tracked));
-    if (used > 0) d.queue.enqueueCopyBuffer(old, b.buffer, 0, 0, used * sizeof(rtcd_tracked), nullptr, timed(d, false));
+    reserve(b, count * sizeof(T));
+    if (used > 0) d.queue.enqueueCopyBuffer(old, b.buffer, 0, 0, used * sizeof(T), nullptr, timed(d, false));
   }
 
   // A new command's event, to be timed once it has finished.
@@ -501,6 +517,9 @@ class OpenClExecutor final : public RayExecutor {
       lane.host_jobs.clear();
       lane.host_first_items.clear();
       lane.host_setups.clear();
+      lane.host_refs.clear();
+      lane.setups_sent = 0;
+      lane.slot_base = RTCD_NO_SLOT;
       lane.host_frames.clear();
       lane.host_near.clear();
       lane.host_tracked.clear();
@@ -521,13 +540,17 @@ class OpenClExecutor final : public RayExecutor {
     };
     for (uint32_t j = 0; j + 1 < jobs.size(); j += 2)
       if (const Residence* r = placed(j))
-        for (uint32_t k : {j, j + 1}) add(devices_[r->place].lanes[which], k, jobs[k], config);
+        for (Lane& lane = devices_[r->place].lanes[which]; uint32_t k : {j, j + 1}) {
+          add(lane, k, jobs[k], config);
+          if (k == j + 1) refer(lane, jobs[j], jobs[k]);
+        }
     for (uint32_t j = 0; j + 1 < jobs.size(); j += 2) {
       if (placed(j)) continue;
       Device& d = *std::min_element(devices_.begin(), devices_.end(), [&](const Device& a, const Device& b) {
         return a.lanes[which].load < b.lanes[which].load;
       });
       for (uint32_t k : {j, j + 1}) add(d.lanes[which], k, jobs[k], config);
+      refer(d.lanes[which], jobs[j], jobs[j + 1]);
     }
   }
 
@@ -610,6 +633,24 @@ class OpenClExecutor final : public RayExecutor {
       throw Error("a pair's setup does not make its job " + std::to_string(lane.batch_jobs.back()) +
                   " (jobs 2i and 2i + 1 must be one pair's two directions, their limits derived from its motion"
                   " between the last step's poses and this step's)");
+  }
+
+  // A walking pair's reference (rtcd_pair_ref), once its two jobs are in:
+  // to its row of last step's pair table where both directions walk, whole,
+  // the rays they kept in one row on this lane's device last step; to its
+  // setup sent after the references otherwise.
+  void refer(Lane& lane, const RayJob& a, const RayJob& b) const {
+    if (!runtime_->place_on_device || !a.iterative) return;
+    const rtcd_pair_setup& p = lane.host_setups.back();
+    const auto whole = [&](const RayJob& job) {
+      return resident(job) && &devices_[job.residence->place].lanes[1] == &lane &&
+             job.residence->slot == a.residence->slot && job.tracked.size() == job.residence->count;
+    };
+    if (whole(a) && whole(b) && a.residence->slot != Residence::kNoRecord) {
+      lane.host_refs.push_back({a.residence->slot, p.flags | RTCD_PAIR_RESIDENT, p.moved});
+    } else {
+      lane.host_refs.push_back({lane.setups_sent++, p.flags, p.moved});
+    }
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves) appended
@@ -736,7 +777,7 @@ class OpenClExecutor final : public RayExecutor {
     GrowingBuffer& kept = d.kept[step_ % 2];
     uint32_t& used = d.kept_used[step_ % 2];
     lane.kept_base = used;
-    reserve_tracked(d, kept, size_t(used) + count, used);
+    reserve_keeping<rtcd_tracked>(d, kept, size_t(used) + count, used);
     used += count;
     reserve(lane.flags, 1);  // bound unread by the compacted layout
     reserve(lane.tallies, jobs_count * sizeof(rtcd_tally));
@@ -759,7 +800,10 @@ class OpenClExecutor final : public RayExecutor {
     set_args(t, 0, lane.tallies.buffer, jobs_count, lane.laid_out.buffer, lane.summaries.buffer, lane.total.buffer);
     launch_group(d, t);
     cl::Kernel& l = d.lay_out;
-    set_args(l, bind_job_rays(l), lane.laid_out.buffer, lane.kept_base, kept.buffer, lane.reports.buffer);
+    reserve(lane.setups, 1);  // unread where the host made the setups
+    reserve(d.pair_table[step_ % 2], 1);
+    set_args(l, bind_job_rays(l), lane.laid_out.buffer, lane.kept_base, kept.buffer, lane.reports.buffer,
+             lane.setups.buffer, lane.slot_base, d.pair_table[step_ % 2].buffer);
     launch(d, l, jobs_count, &d.recovering[step_ % 2]);
     lane.host_total.resize(1);
     lane.host_summaries.resize(jobs_count);
@@ -830,22 +874,19 @@ class OpenClExecutor final : public RayExecutor {
       write(d, d.body_shapes, body_shapes_);
       d.body_shapes_written = body_shapes_.size();
     }
-    write(d, lane.setups, lane.host_setups);
+    send_pairs(d, lane);
     reserve(lane.jobs, jobs_count * sizeof(rtcd_device_job));
-    reserve(lane.first_items, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
     reserve(lane.frames, jobs_count * sizeof(rtcd_frame));
     // Tracked rays that were not kept here come from the host's mirror,
     // after the kept ones the walks read.
     GrowingBuffer& tracked = d.kept[(step_ + 1) % 2];
-    reserve_tracked(d, tracked, size_t(lane.upload_base) + lane.host_tracked.size(), lane.upload_base);
+    reserve_keeping<rtcd_tracked>(d, tracked, size_t(lane.upload_base) + lane.host_tracked.size(), lane.upload_base);
     write_at(d, tracked, lane.host_tracked, lane.upload_base);
     d.kept_used[(step_ + 1) % 2] = lane.upload_base + rtcd_uint(lane.host_tracked.size());
     reserve(lane.flags, lane.items);
     reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
     reserve(lane.near, 1);  // unread by walks
     if (!lane.host_jobs.front().params.iterative) write(d, lane.near, lane.host_near);
-    set_args(d.offsets, 0, lane.setups.buffer, jobs_count, lane.first_items.buffer, kSetupCountsWord, kSetupWords);
-    launch_group(d, d.offsets);
     cl::Kernel& p = d.prepare;
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
@@ -882,6 +923,37 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.first_rays, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
     set_args(d.offsets, 0, lane.counts.buffer, jobs_count, lane.first_rays.buffer, rtcd_uint(0), rtcd_uint(2));
     launch_group(d, d.offsets);
+  }
+
+  // The batch's pairs up (their setups, or a walking batch's references
+  // and the setups they name) and their setups made on the device, with its
+  // item list (rtcd_pair_list); rows for them in the step's pair table.
+  void send_pairs(Device& d, Lane& lane) {
+    const auto jobs_count = rtcd_uint(lane.host_jobs.size());
+    if (lane.host_refs.empty()) {
+      write(d, lane.list, lane.host_setups);
+    } else {
+      const auto words = [](const auto& v) { return std::as_bytes(std::span(v)).size() / sizeof(rtcd_uint); };
+      lane.host_list.resize(words(lane.host_refs) + size_t(lane.setups_sent) * RTCD_PAIR_SETUP_WORDS);
+      std::memcpy(lane.host_list.data(), lane.host_refs.data(), lane.host_refs.size() * sizeof(rtcd_pair_ref));
+      rtcd_uint* sent = lane.host_list.data() + words(lane.host_refs);
+      for (size_t p = 0; p < lane.host_refs.size(); ++p) {
+        if (lane.host_refs[p].flags & RTCD_PAIR_RESIDENT) continue;
+        std::memcpy(sent + size_t(lane.host_refs[p].slot) * RTCD_PAIR_SETUP_WORDS, &lane.host_setups[p],
+                    sizeof(rtcd_pair_setup));
+      }
+      write(d, lane.list, lane.host_list);
+    }
+    reserve(lane.setups, lane.host_setups.size() * sizeof(rtcd_pair_setup));
+    reserve(lane.first_items, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
+    reserve(d.pair_table[(step_ + 1) % 2], 1);  // unread by a full batch
+    set_args(d.pair_list, 0, lane.list.buffer, jobs_count, rtcd_uint(lane.host_refs.size()),
+             d.pair_table[(step_ + 1) % 2].buffer, lane.setups.buffer, lane.first_items.buffer);
+    launch_group(d, d.pair_list);
+    uint32_t& rows = d.rows_used[step_ % 2];
+    lane.slot_base = rows;
+    reserve_keeping<rtcd_pair_setup>(d, d.pair_table[step_ % 2], size_t(rows) + lane.host_setups.size(), rows);
+    rows += uint32_t(lane.host_setups.size());
   }
 
   // The compacted layout on the device: candidates scattered and traced
@@ -1123,7 +1195,8 @@ class OpenClExecutor final : public RayExecutor {
       }
       if (job.residence) {
         const auto made = uint32_t(tally.contacts + tally.predictive);
-        *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true, made};
+        const uint32_t slot = lane.slot_base == RTCD_NO_SLOT ? Residence::kNoRecord : lane.slot_base + uint32_t(l / 2);
+        *job.residence = {kept_step, i, lane.kept_base + first, s.kept, true, made, slot};
       }
     }
     if (report != reports_end) throw Error("a device returned a report out of its job's order");

@@ -1,7 +1,8 @@
 // Kernels of kernels.cl alone, on the device, against the host.
 //
 // The job scans: rtcd_offsets (each
-// job's first ray and the total) and rtcd_total (each job's summary and
+// job's first ray and the total), rtcd_pair_list (each pair's setup, each
+// job's first item) and rtcd_total (each job's summary and
 // first report, the batch's counters summed) run as one work-group whose
 // work-items each take a share of the jobs. Their answers against the
 // host's sums for job counts around multiples of the group's width, where
@@ -88,31 +89,75 @@ TEST(OpenClScans, OffsetsAreTheHostsPrefixSumAroundGroupMultiples) {
   }
 }
 
-// rtcd_offsets over the pairs' setups: job 2p (direction 0 of pair p)
-// starts where the pairs before it end, job 2p + 1 after direction 0's
-// items.
-TEST(OpenClScans, FirstItemsAreTheHostsPrefixSumAroundGroupMultiples) {
+// rtcd_pair_list makes the pairs' setups from what the host sent: a full
+// batch's setups as they are; a walking batch's references, each to its
+// row of last step's pair table (its bodies and kept rays, with the
+// reference's flags and motion) or to a setup sent after them. Then its
+// item list: job 2p (direction 0 of pair p) starts where the pairs before
+// it end, job 2p + 1 after direction 0's items.
+TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples) {
   const auto rt = runtime();
   if (!rt->place_on_device) GTEST_FAIL() << "the device lacks fp64: the host lays out the items there";
   std::mt19937 g(15);
-  std::uniform_int_distribution<rtcd_uint> count(0, 40);
-  for (const size_t pairs : kJobCounts) {
-    SCOPED_TRACE(std::to_string(pairs) + " pairs");
-    std::vector<rtcd_pair_setup> setups(pairs);
-    for (rtcd_pair_setup& p : setups) p = {{0, 0}, 0u, 0.0f, {count(g), count(g)}, {0, 0}};
-    std::vector<rtcd_uint> first_items(2 * pairs + 1, 0xdeadbeef);
-    const cl::Buffer firsts_buffer = buffer_of(*rt, first_items);
-    const auto counts_word = rtcd_uint(offsetof(rtcd_pair_setup, item_count) / 4);
-    run_scan(*rt, "rtcd_offsets", 2 * pairs, {buffer_of(*rt, setups), firsts_buffer},
-             {counts_word, rtcd_uint(sizeof(rtcd_pair_setup) / 4)});
-    read_back(*rt, firsts_buffer, first_items);
-    rtcd_uint sum = 0;
-    for (size_t p = 0; p < pairs; ++p) {
-      ASSERT_EQ(first_items[2 * p], sum) << "pair " << p;
-      ASSERT_EQ(first_items[2 * p + 1], sum + setups[p].item_count[0]) << "pair " << p;
-      sum += setups[p].item_count[0] + setups[p].item_count[1];
+  std::uniform_int_distribution<rtcd_uint> count(0, 40), word(0, 1u << 20);
+  const auto random_setup = [&] {
+    return rtcd_pair_setup{{word(g), word(g)}, word(g) % 16, float(word(g)), {count(g), count(g)}, {word(g), word(g)}};
+  };
+  std::vector<rtcd_pair_setup> table(50);
+  for (rtcd_pair_setup& row : table) row = random_setup();
+  for (const bool walking : {false, true}) {
+    for (const size_t pairs : kJobCounts) {
+      SCOPED_TRACE(std::string(walking ? "walking, " : "full, ") + std::to_string(pairs) + " pairs");
+      std::vector<rtcd_pair_setup> setups(pairs), sent;
+      std::vector<rtcd_pair_ref> refs;
+      for (rtcd_pair_setup& p : setups) {
+        p = random_setup();
+        p.flags &= ~RTCD_PAIR_RESIDENT;
+        if (!walking) continue;
+        const rtcd_uint row = word(g) % (2 * table.size());
+        if (row < table.size()) {  // resident: the row's but for flags and motion
+          const rtcd_pair_setup flags_and_motion = p;
+          p = table[row];
+          p.flags = flags_and_motion.flags;
+          p.moved = flags_and_motion.moved;
+          refs.push_back({row, p.flags | RTCD_PAIR_RESIDENT, p.moved});
+        } else {
+          refs.push_back({rtcd_uint(sent.size()), p.flags, p.moved});
+          sent.push_back(p);
+        }
+      }
+      std::vector<rtcd_uint> list(refs.size() * RTCD_PAIR_REF_WORDS + (walking ? sent : setups).size() * 8);
+      std::memcpy(list.data(), refs.data(), refs.size() * sizeof(rtcd_pair_ref));
+      std::memcpy(list.data() + refs.size() * RTCD_PAIR_REF_WORDS, (walking ? sent : setups).data(),
+                  (walking ? sent : setups).size() * sizeof(rtcd_pair_setup));
+      list.push_back(0);  // no empty buffer
+      std::vector<rtcd_pair_setup> made(pairs);
+      std::vector<rtcd_uint> first_items(2 * pairs + 1, 0xdeadbeef);
+      const cl::Buffer made_buffer = buffer_of(*rt, made), firsts_buffer = buffer_of(*rt, first_items);
+      const cl::Buffer list_buffer = buffer_of(*rt, list), table_buffer = buffer_of(*rt, table);
+      cl::Kernel k(rt->program, "rtcd_pair_list");
+      k.setArg(0, list_buffer);
+      k.setArg(1, rtcd_uint(2 * pairs));
+      k.setArg(2, rtcd_uint(refs.size()));
+      k.setArg(3, table_buffer);
+      k.setArg(4, made_buffer);
+      k.setArg(5, firsts_buffer);
+      const cl::Device& device = rt->devices.front();
+      const size_t group = std::min(kGroupSize, k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device));
+      cl::CommandQueue queue(rt->context, device);
+      queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange(group), cl::NDRange(group));
+      queue.finish();
+      read_back(*rt, made_buffer, made);
+      read_back(*rt, firsts_buffer, first_items);
+      rtcd_uint sum = 0;
+      for (size_t p = 0; p < pairs; ++p) {
+        ASSERT_EQ(std::memcmp(&made[p], &setups[p], sizeof(rtcd_pair_setup)), 0) << "pair " << p;
+        ASSERT_EQ(first_items[2 * p], sum) << "pair " << p;
+        ASSERT_EQ(first_items[2 * p + 1], sum + setups[p].item_count[0]) << "pair " << p;
+        sum += setups[p].item_count[0] + setups[p].item_count[1];
+      }
+      EXPECT_EQ(first_items[2 * pairs], sum);
     }
-    EXPECT_EQ(first_items[2 * pairs], sum);
   }
 }
 

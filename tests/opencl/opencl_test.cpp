@@ -394,10 +394,12 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
   const auto steps = run_scene("opencl:devices=1", {"concave", Mode::iterative, pairs, 6});
   expect_ran_on_devices(steps, 1);
   constexpr size_t kCounters = 8 * 24, kSummary = 8, kKept = 12, kReport = 40;
-  // Up: every body's pose and a setup a pair (both directions' parameters,
-  // first items and frames are made on the device; the bodies' shapes went
-  // up with the first step); the walks' rays are there already.
-  constexpr size_t kPose = 56, kPair = 32;
+  // Up: every body's pose and a reference a pair to its row of the last
+  // step's pair table (its bodies and kept rays: rtcd_pair_ref), with its
+  // flags and motion; both directions' parameters, first items and frames
+  // are made on the device, the bodies' shapes went up with the first
+  // step, and the walks' rays are there already.
+  constexpr size_t kPose = 56, kPair = 12;
   size_t walked = 0, reported = 0;
   for (size_t s = 2; s < steps.size(); ++s) {
     SCOPED_TRACE("step " + std::to_string(s));

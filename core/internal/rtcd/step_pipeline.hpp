@@ -44,6 +44,9 @@ struct Residence {
   uint32_t count = 0;   // how many: the first `count` kept outcomes
   bool placed = false;  // the pair-direction has run at `place`
   uint32_t reports = 0;  // placed: the contacts and predictive rays it made there last
+  uint32_t slot = kNoRecord;  // the executor's record of the pair there (a device's pair-table row)
+
+  static constexpr uint32_t kNoRecord = 0xffffffffu;
 
   void drop_rays() { step = 0; }
 };

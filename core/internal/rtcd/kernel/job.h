@@ -40,6 +40,27 @@ RTCD_INLINE float rtcd_float_at_most(double x) {
   return (double)f > x ? RTCD_NEXTAFTER(f, -INFINITY) : f;
 }
 
+/* RTCD_JOB_EDGES of a pair setup's direction d. */
+#define RTCD_PAIR_EDGES(d) (RTCD_JOB_EDGES << (d))
+/* The pair's motion is equation 2.1 from its bodies' poses of the last
+ * step to this step's (rtcd_pair_motion); else it is 0. */
+#define RTCD_PAIR_MOTION 8u
+
+/* One pair as the host decided it, both directions in one: direction 0
+ * casts the first body's rays against the second, direction 1 the
+ * second's against the first. The directions share the motion (derived on
+ * the device from the poses: rtcd_pair_motion), the limits derived from it
+ * and the mode, and their items follow one another, after the pair
+ * before's (a device scans the counts: rtcd_pair_list). The bodies'
+ * shapes are the device's already. 32 bytes. */
+typedef struct {
+  rtcd_uint bodies[2];
+  rtcd_uint flags; /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d), RTCD_PAIR_MOTION */
+  float moved;     /* iterative pairs: since the pair's full step (equation 2.1), rounded up */
+  rtcd_uint item_count[2];
+  rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its near leaves */
+} rtcd_pair_setup;
+
 #ifdef RTCD_HAS_DOUBLE
 /* One pair-direction as the host decided it. 64 bytes. */
 typedef struct {
@@ -58,27 +79,6 @@ typedef struct {
   rtcd_uint first_near;    /* full jobs: where its near leaves are */
   rtcd_uint unused;        /* 0: no padding, so two setups compare bytewise */
 } rtcd_job_setup;
-
-/* RTCD_JOB_EDGES of a pair setup's direction d. */
-#define RTCD_PAIR_EDGES(d) (RTCD_JOB_EDGES << (d))
-/* The pair's motion is equation 2.1 from its bodies' poses of the last
- * step to this step's (rtcd_pair_motion); else it is 0. */
-#define RTCD_PAIR_MOTION 8u
-
-/* One pair as the host decided it, both directions in one: direction 0
- * casts the first body's rays against the second, direction 1 the
- * second's against the first. The directions share the motion (derived on
- * the device from the poses: rtcd_pair_motion), the limits derived from it
- * and the mode, and their items follow one another, after the pair
- * before's (a device scans the counts: rtcd_offsets). The bodies'
- * shapes are the device's already. 32 bytes. */
-typedef struct {
-  rtcd_uint bodies[2];
-  rtcd_uint flags; /* RTCD_JOB_ITERATIVE, RTCD_PAIR_EDGES(d), RTCD_PAIR_MOTION */
-  float moved;     /* iterative pairs: since the pair's full step (equation 2.1), rounded up */
-  rtcd_uint item_count[2];
-  rtcd_uint first[2]; /* iterative: where its tracked rays are; full: its near leaves */
-} rtcd_pair_setup;
 
 /* Direction d's setup, with the pair's limits derived from its motion in
  * the last step, the settings and its bodies' shapes' scales (bodies[0]'s
