@@ -83,14 +83,25 @@ RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint leaf
  * RTCD_PAIR_RESIDENT among its flags, a pair that walks the rays it kept on
  * this device last step, whole: its setup is row `slot` of last step's pair
  * table, with these flags and this motion. Else its setup is the batch's
- * `slot`th sent after the references. 12 bytes. */
+ * `slot`th sent after the references. 8 bytes: the slot and the flags
+ * share a word (rtcd_pair_ref_of). */
 typedef struct {
-  rtcd_uint slot;
-  rtcd_uint flags; /* rtcd_pair_setup's, and RTCD_PAIR_RESIDENT */
+  rtcd_uint slot_flags;
   float moved;
 } rtcd_pair_ref;
-#define RTCD_PAIR_REF_WORDS 3u
+#define RTCD_PAIR_REF_WORDS 2u
 #define RTCD_PAIR_RESIDENT 16u
+#define RTCD_PAIR_FLAG_BITS 5u /* rtcd_pair_setup's flags and RTCD_PAIR_RESIDENT */
+#define RTCD_PAIR_MAX_SLOT ((1u << (32u - RTCD_PAIR_FLAG_BITS)) - 1u)
+#define RTCD_PAIR_MAX_FLAGS ((1u << RTCD_PAIR_FLAG_BITS) - 1u)
+
+/* The reference to `slot` with `flags` (slot <= RTCD_PAIR_MAX_SLOT). */
+RTCD_INLINE rtcd_pair_ref rtcd_pair_ref_of(rtcd_uint slot, rtcd_uint flags, float moved) {
+  rtcd_pair_ref r;
+  r.slot_flags = slot << RTCD_PAIR_FLAG_BITS | flags;
+  r.moved = moved;
+  return r;
+}
 /* A batch whose setups the host made writes no pair table row. */
 #define RTCD_NO_SLOT 0xffffffffu
 

@@ -335,12 +335,13 @@ __kernel void rtcd_pair_list(__global const rtcd_uint* list, rtcd_uint job_count
       s = sent[p];
     } else {
       const rtcd_pair_ref r = refs[p];
-      if (r.flags & RTCD_PAIR_RESIDENT) {
-        s = before[r.slot];
-        s.flags = r.flags & ~RTCD_PAIR_RESIDENT;
+      const rtcd_uint slot = r.slot_flags >> RTCD_PAIR_FLAG_BITS, flags = r.slot_flags & RTCD_PAIR_MAX_FLAGS;
+      if (flags & RTCD_PAIR_RESIDENT) {
+        s = before[slot];
+        s.flags = flags & ~RTCD_PAIR_RESIDENT;
         s.moved = r.moved;
       } else {
-        s = sent[r.slot];
+        s = sent[slot];
       }
     }
     setups[p] = s;

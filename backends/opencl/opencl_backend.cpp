@@ -81,6 +81,8 @@ static_assert(RTCD_PAIR_SETUP_WORDS * sizeof(rtcd_uint) == sizeof(rtcd_pair_setu
               RTCD_PAIR_COUNTS_WORD * sizeof(rtcd_uint) == offsetof(rtcd_pair_setup, item_count) &&
               RTCD_PAIR_REF_WORDS * sizeof(rtcd_uint) == sizeof(rtcd_pair_ref) && alignof(rtcd_pair_ref) == 4 &&
               RTCD_NO_SLOT == Residence::kNoRecord);
+static_assert((RTCD_JOB_ITERATIVE | RTCD_PAIR_EDGES(0) | RTCD_PAIR_EDGES(1) | RTCD_PAIR_MOTION | RTCD_PAIR_RESIDENT) ==
+              RTCD_PAIR_MAX_FLAGS);
 
 constexpr size_t kGroupSize = 64;
 // A kept outcome's vertex until its walk start is recovered.
@@ -647,9 +649,9 @@ class OpenClExecutor final : public RayExecutor {
              job.residence->slot == a.residence->slot && job.tracked.size() == job.residence->count;
     };
     if (whole(a) && whole(b) && a.residence->slot != Residence::kNoRecord) {
-      lane.host_refs.push_back({a.residence->slot, p.flags | RTCD_PAIR_RESIDENT, p.moved});
+      lane.host_refs.push_back(rtcd_pair_ref_of(a.residence->slot, p.flags | RTCD_PAIR_RESIDENT, p.moved));
     } else {
-      lane.host_refs.push_back({lane.setups_sent++, p.flags, p.moved});
+      lane.host_refs.push_back(rtcd_pair_ref_of(lane.setups_sent++, p.flags, p.moved));
     }
   }
 
@@ -938,8 +940,9 @@ class OpenClExecutor final : public RayExecutor {
       std::memcpy(lane.host_list.data(), lane.host_refs.data(), lane.host_refs.size() * sizeof(rtcd_pair_ref));
       rtcd_uint* sent = lane.host_list.data() + words(lane.host_refs);
       for (size_t p = 0; p < lane.host_refs.size(); ++p) {
-        if (lane.host_refs[p].flags & RTCD_PAIR_RESIDENT) continue;
-        std::memcpy(sent + size_t(lane.host_refs[p].slot) * RTCD_PAIR_SETUP_WORDS, &lane.host_setups[p],
+        const rtcd_uint slot_flags = lane.host_refs[p].slot_flags;
+        if (slot_flags & RTCD_PAIR_RESIDENT) continue;
+        std::memcpy(sent + size_t(slot_flags >> RTCD_PAIR_FLAG_BITS) * RTCD_PAIR_SETUP_WORDS, &lane.host_setups[p],
                     sizeof(rtcd_pair_setup));
       }
       write(d, lane.list, lane.host_list);
@@ -951,6 +954,8 @@ class OpenClExecutor final : public RayExecutor {
              d.pair_table[(step_ + 1) % 2].buffer, lane.setups.buffer, lane.first_items.buffer);
     launch_group(d, d.pair_list);
     uint32_t& rows = d.rows_used[step_ % 2];
+    if (lane.host_setups.size() > RTCD_PAIR_MAX_SLOT - rows)
+      throw Error("a device holds at most " + std::to_string(RTCD_PAIR_MAX_SLOT) + " pairs a step");
     lane.slot_base = rows;
     reserve_keeping<rtcd_pair_setup>(d, d.pair_table[step_ % 2], size_t(rows) + lane.host_setups.size(), rows);
     rows += uint32_t(lane.host_setups.size());

@@ -112,7 +112,6 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
       std::vector<rtcd_pair_ref> refs;
       for (rtcd_pair_setup& p : setups) {
         p = random_setup();
-        p.flags &= ~RTCD_PAIR_RESIDENT;
         if (!walking) continue;
         const rtcd_uint row = word(g) % (2 * table.size());
         if (row < table.size()) {  // resident: the row's but for flags and motion
@@ -120,9 +119,9 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
           p = table[row];
           p.flags = flags_and_motion.flags;
           p.moved = flags_and_motion.moved;
-          refs.push_back({row, p.flags | RTCD_PAIR_RESIDENT, p.moved});
+          refs.push_back(rtcd_pair_ref_of(row, p.flags | RTCD_PAIR_RESIDENT, p.moved));
         } else {
-          refs.push_back({rtcd_uint(sent.size()), p.flags, p.moved});
+          refs.push_back(rtcd_pair_ref_of(rtcd_uint(sent.size()), p.flags, p.moved));
           sent.push_back(p);
         }
       }

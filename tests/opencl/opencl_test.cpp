@@ -399,7 +399,7 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
   // flags and motion; both directions' parameters, first items and frames
   // are made on the device, the bodies' shapes went up with the first
   // step, and the walks' rays are there already.
-  constexpr size_t kPose = 56, kPair = 12;
+  constexpr size_t kPose = 56, kPair = 8;
   size_t walked = 0, reported = 0;
   for (size_t s = 2; s < steps.size(); ++s) {
     SCOPED_TRACE("step " + std::to_string(s));
