@@ -21,7 +21,7 @@ typedef struct {
   rtcd_uint first_primitive; /* the BVH's triangle list */
   rtcd_uint first_source;    /* ray origins and directions, the items' leaves, the leaves' items */
   rtcd_uint source_count;
-  rtcd_uint first_source_node; /* the source tree's nodes' item ranges */
+  rtcd_uint first_leaf;         /* the source tree's leaves' item ranges */
   float radius;             /* sphere */
   rtcd_vec3 half_extents;   /* box */
 } rtcd_device_shape;
@@ -57,22 +57,55 @@ RTCD_INLINE rtcd_device_job rtcd_device_job_of(rtcd_uint config, const rtcd_job_
 }
 #endif
 
-/* A full job's near leaves (source-tree nodes) as the host sends them, the
- * shorter of two forms: a header word RTCD_NEAR_BITS and one bit a node, or
- * a header word n and the n leaves' nodes in increasing order. */
+/* A full job's near leaves as the host sends them (leaves numbered in
+ * their source tree's node order), the shortest of three forms: a header
+ * word RTCD_NEAR_BITS and one bit a leaf; a header word n and the n leaves
+ * in increasing order, two to a word (the first in the low half), where
+ * the shape has at most 65536 leaves; or a header RTCD_NEAR_WIDE | n and
+ * a word a leaf. A job without items has none. */
 #define RTCD_NEAR_BITS 0xffffffffu
+#define RTCD_NEAR_WIDE 0x80000000u
 
-/* Whether a job's near leaves hold source-tree node `leaf`. */
+/* The words of the shortest form for n leaves of `leaf_count`. */
+RTCD_INLINE rtcd_uint rtcd_near_words(rtcd_uint n, rtcd_uint leaf_count) {
+  const rtcd_uint bits = 1 + (leaf_count + 31) / 32, list = 1 + (leaf_count <= 65536u ? (n + 1) / 2 : n);
+  return list < bits ? list : bits;
+}
+
+/* Writes n leaves (increasing) of `leaf_count` at `near`, in the shortest
+ * form (rtcd_near_words of them, zeroed by the caller). */
+RTCD_INLINE void rtcd_near_write(const rtcd_uint* leaves, rtcd_uint n, rtcd_uint leaf_count, rtcd_uint* near) {
+  rtcd_uint k;
+  if (rtcd_near_words(n, leaf_count) == 1 + (leaf_count + 31) / 32 && n > 0) {
+    near[0] = RTCD_NEAR_BITS;
+    for (k = 0; k < n; ++k) near[1 + leaves[k] / 32] |= (rtcd_uint)1 << (leaves[k] % 32);
+  } else if (leaf_count <= 65536u) {
+    near[0] = n;
+    for (k = 0; k < n; ++k) near[1 + k / 2] |= leaves[k] << (16 * (k % 2));
+  } else {
+    near[0] = RTCD_NEAR_WIDE | n;
+    for (k = 0; k < n; ++k) near[1 + k] = leaves[k];
+  }
+}
+
+/* A list's length and its k-th leaf (not for bits). */
+RTCD_INLINE rtcd_uint rtcd_near_count(RTCD_GLOBAL const rtcd_uint* near) { return near[0] & ~RTCD_NEAR_WIDE; }
+RTCD_INLINE rtcd_uint rtcd_near_entry(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint k) {
+  if (near[0] & RTCD_NEAR_WIDE) return near[1 + k];
+  return (near[1 + k / 2] >> (16 * (k % 2))) & 0xffffu;
+}
+
+/* Whether a job's near leaves hold `leaf`. */
 RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint leaf) {
-  rtcd_uint lo = 1, hi;
+  rtcd_uint lo = 0, hi;
   if (near[0] == RTCD_NEAR_BITS) return (int)((near[1 + leaf / 32] >> (leaf % 32)) & 1u);
-  hi = 1 + near[0];
-  while (lo < hi) { /* the first listed node >= leaf */
+  hi = rtcd_near_count(near);
+  while (lo < hi) { /* the first listed leaf >= leaf */
     rtcd_uint mid = lo + (hi - lo) / 2;
-    if (near[mid] < leaf) lo = mid + 1;
+    if (rtcd_near_entry(near, mid) < leaf) lo = mid + 1;
     else hi = mid;
   }
-  return lo < 1 + near[0] && near[lo] == leaf;
+  return lo < rtcd_near_count(near) && rtcd_near_entry(near, lo) == leaf;
 }
 
 /* rtcd_pair_setup's words, and where its item counts are among them. */

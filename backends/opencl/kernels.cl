@@ -87,13 +87,13 @@ RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint jo
 
 /* The items of a list of at most RTCD_NEAR_MERGE leaves, `count` in all,
  * in increasing order: a merge of the leaves' item lists (each in order,
- * `ranges` of `items`), the least head next. */
+ * `ranges` of `items`, by leaf), the least head next. */
 RTCD_INLINE void rtcd_merge_leaves(__global const rtcd_uint* near, __global const rtcd_uint* items,
                                    __global const rtcd_uint* ranges, __global rtcd_uint* out, rtcd_uint count) {
   rtcd_uint at[RTCD_NEAR_MERGE], end[RTCD_NEAR_MERGE], head[RTCD_NEAR_MERGE];
   rtcd_uint runs = 0, r, n;
-  for (r = 0; r < near[0]; ++r) {
-    const rtcd_uint leaf = near[1 + r];
+  for (r = 0; r < rtcd_near_count(near); ++r) {
+    const rtcd_uint leaf = rtcd_near_entry(near, r);
     at[runs] = ranges[2 * leaf];
     end[runs] = ranges[2 * leaf + 1];
     if (at[runs] == end[runs]) continue;
@@ -131,7 +131,7 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
                            rtcd_uint limits_set, __global const rtcd_device_shape* shapes,
                            __global const rtcd_shape_traits* traits, __global const rtcd_box* bounds,
                            __global const rtcd_shape_scale* scales, __global const rtcd_uint* source_leaves,
-                           __global const rtcd_uint* leaf_items, __global const rtcd_uint* source_ranges,
+                           __global const rtcd_uint* leaf_items, __global const rtcd_uint* leaf_ranges,
                            __global const rtcd_uint* near, __global const rtcd_pose* poses,
                            __global const rtcd_pose* before, __global const rtcd_uint* body_shapes,
                            __global rtcd_device_job* jobs, __global const rtcd_uint* first_items,
@@ -175,9 +175,9 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   frames[j] = frame;
   if (job.params.iterative || job.item_count == 0) return;
   near += job.first_near;
-  if (near[0] <= RTCD_NEAR_MERGE) {
+  if (near[0] != RTCD_NEAR_BITS && rtcd_near_count(near) <= RTCD_NEAR_MERGE) {
     rtcd_merge_leaves(near, leaf_items + shapes[job.source].first_source,
-                      source_ranges + 2 * shapes[job.source].first_source_node, vertices + job.first_item,
+                      leaf_ranges + 2 * shapes[job.source].first_leaf, vertices + job.first_item,
                       job.item_count);
     return;
   }

@@ -98,7 +98,7 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
-  kPrimitives, kOrigins, kDirections, kSourceLeaves, kLeafItems, kSourceRanges, kBounds, kTraits, kScales
+  kPrimitives, kOrigins, kDirections, kSourceLeaves, kLeafItems, kLeafRanges, kBounds, kTraits, kScales
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -412,7 +412,7 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
                 upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves),
-                upload_once(data_.leaf_items), upload_once(data_.source_ranges),
+                upload_once(data_.leaf_items), upload_once(data_.leaf_ranges),
                 upload_once(data_.bounds),     upload_once(data_.traits),     upload_once(data_.scales)};
     d.shapes_uploaded = data_.table.size();
   }
@@ -656,29 +656,24 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // A full job's leaves near its overlap box (visit_near_leaves) appended
-  // to the batch's in the shorter form (rtcd_near_leaf): their list, or
-  // bits by source-tree node; returns how many items they hold.
+  // to the batch's in the shortest form (rtcd_near_write); returns how many
+  // items they hold.
   size_t mark_near_leaves(Lane& lane, const RayJob& job, rtcd_device_job& dj) const {
     const RaySources& rs = shapes_[job.source]->sources();
+    const rtcd_uint* leaf_of_node = data_.leaf_of_node.data() + data_.first_node[job.source];
     lane.leaves.clear();
     size_t items = 0;
     const DistanceBound& bound = shapes_[job.target]->distance_bound();
     visit_near_leaves(make_frame(job), rs, bound, edge_reach(dj.params), [&](uint32_t n) {
-      lane.leaves.push_back(n);
+      lane.leaves.push_back(leaf_of_node[n]);
       items += rs.items_of(n).size();
     });
     dj.first_near = rtcd_uint(lane.host_near.size());
-    const size_t words = (rs.nodes.size() + 31) / 32;
-    if (lane.leaves.size() < words) {
-      std::sort(lane.leaves.begin(), lane.leaves.end());
-      lane.host_near.push_back(rtcd_uint(lane.leaves.size()));
-      lane.host_near.insert(lane.host_near.end(), lane.leaves.begin(), lane.leaves.end());
-    } else {
-      lane.host_near.push_back(RTCD_NEAR_BITS);
-      lane.host_near.resize(lane.host_near.size() + words, 0);
-      rtcd_uint* bits = lane.host_near.data() + dj.first_near + 1;
-      for (const uint32_t n : lane.leaves) bits[n / 32] |= rtcd_uint(1) << (n % 32);
-    }
+    if (lane.leaves.empty()) return 0;
+    std::sort(lane.leaves.begin(), lane.leaves.end());
+    const auto n = rtcd_uint(lane.leaves.size()), leaf_count = data_.leaf_counts[job.source];
+    lane.host_near.resize(lane.host_near.size() + rtcd_near_words(n, leaf_count), 0);
+    rtcd_near_write(lane.leaves.data(), n, leaf_count, lane.host_near.data() + dj.first_near);
     return items;
   }
 
@@ -893,7 +888,7 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
              l.distance_extension, l.max_walk_steps, l.set, d.shapes[kTable], d.shapes[kTraits], d.shapes[kBounds],
-             d.shapes[kScales], d.shapes[kSourceLeaves], d.shapes[kLeafItems], d.shapes[kSourceRanges],
+             d.shapes[kScales], d.shapes[kSourceLeaves], d.shapes[kLeafItems], d.shapes[kLeafRanges],
              lane.near.buffer, d.poses.buffer, d.before.buffer, d.body_shapes.buffer, lane.jobs.buffer,
              lane.first_items.buffer, lane.frames.buffer, lane.vertices.buffer);
     launch(d, p, jobs_count);

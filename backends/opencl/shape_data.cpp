@@ -26,15 +26,20 @@ void ShapeData::add(const Shape& shape, const ShapeScale& scale, bool bvh) {
   }
   source_leaves.resize(origins.size(), 0);
   if (rs.order.size() != rs.item_count()) throw Error("a shape's ray sources are not indexed (RaySources::index)");
-  d.first_source_node = rtcd_uint(source_ranges.size() / 2);
+  d.first_leaf = rtcd_uint(leaf_ranges.size() / 2);
+  first_node.push_back(rtcd_uint(leaf_of_node.size()));
   leaf_items.insert(leaf_items.end(), rs.order.begin(), rs.order.end());
+  rtcd_uint leaves = 0;
   for (uint32_t n = 0; n < rs.nodes.size(); ++n) {
     const RaySources::Node& node = rs.nodes[n];
-    source_ranges.insert(source_ranges.end(), {node.begin, node.end});
+    leaf_of_node.push_back(node.child == 0 ? leaves : ~rtcd_uint(0));  // inner nodes have none
     if (node.child != 0) continue;
-    for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = n;
+    leaf_ranges.insert(leaf_ranges.end(), {node.begin, node.end});
+    for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = leaves;
     std::sort(leaf_items.begin() + d.first_source + node.begin, leaf_items.begin() + d.first_source + node.end);
+    ++leaves;
   }
+  leaf_counts.push_back(leaves);
   if (const Mesh* mesh = shape.mesh()) {
     d.kind = RTCD_TARGET_MESH;
     d.triangle_count = rtcd_uint(mesh->triangle_count());

@@ -17,12 +17,15 @@ struct ShapeData {
   std::vector<rtcd_shape_traits> traits;  // per shape: what its jobs' parameters read
   std::vector<rtcd_shape_scale> scales;   // per shape: what its pairs' limits read
   std::vector<rtcd_vec3> positions, normals, origins, directions;
-  std::vector<rtcd_uint> source_leaves;  // per item: its leaf's node in the shape's source tree
-  // The source tree's leaves' items, each leaf's in increasing order, as
-  // one list a shape (its place by first_source), and each node's range of
-  // that list (begin, end; by first_source_node): a device lists a full
-  // job's items from its few near leaves instead of testing every item.
-  std::vector<rtcd_uint> leaf_items, source_ranges;
+  // The source trees' leaves, numbered a shape in node order: per item
+  // its leaf; the leaves' items, each leaf's in increasing order, as one
+  // list a shape (its place by first_source), and each leaf's range of that
+  // list (begin, end; by first_leaf): a device lists a full job's items
+  // from its few near leaves instead of testing every item.
+  std::vector<rtcd_uint> source_leaves, leaf_items, leaf_ranges;
+  // On the host: each shape's leaf count and, from its first_node on, each
+  // source-tree node's leaf number (the search finds nodes).
+  std::vector<rtcd_uint> leaf_counts, first_node, leaf_of_node;
   // Fold guards: ring_first rebased into the one ring list, with a
   // closing entry after the last mesh's triangles.
   std::vector<rtcd_fold_face> fold_faces;
