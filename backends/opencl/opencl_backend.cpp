@@ -118,6 +118,8 @@ struct Lane {
   // a pair, then the setups of those not resident; `list` the words sent.
   std::vector<rtcd_pair_ref> host_refs;
   std::vector<rtcd_uint> host_list;
+  double pair_motion = 0;  // the last pair's, while its setup is checked (add_direction)
+  bool motions = false;    // a pair derives its motion from the last step's poses (RTCD_PAIR_MOTION)
   uint32_t setups_sent = 0;            // after the references
   uint32_t slot_base = RTCD_NO_SLOT;  // its pairs' rows in the step's pair table
   std::vector<rtcd_frame> host_frames;      // the host places the rays: it makes the frames
@@ -521,6 +523,7 @@ class OpenClExecutor final : public RayExecutor {
       lane.host_setups.clear();
       lane.host_refs.clear();
       lane.setups_sent = 0;
+      lane.motions = false;
       lane.slot_base = RTCD_NO_SLOT;
       lane.host_frames.clear();
       lane.host_near.clear();
@@ -624,11 +627,13 @@ class OpenClExecutor final : public RayExecutor {
     const rtcd_uint shape_0 = body_shapes_.at(p.bodies[0]), shape_1 = body_shapes_.at(p.bodies[1]);
     const rtcd_uint pair_first_item = d == 0 ? s.first_item : s.first_item - p.item_count[0];
     const rtcd_shape_scale &scale_0 = data_.scales[shape_0], &scale_1 = data_.scales[shape_1];
-    const double motion =
-        p.flags & RTCD_PAIR_MOTION
-            ? rtcd_bodies_motion(p.bodies[0], p.bodies[1], last_poses_.data(), poses_.data(), scale_0.radius,
-                                 scale_1.radius)
-            : 0.0;
+    if (d == 0) {  // the pair's motion, as the device derives it, once
+      lane.pair_motion = p.flags & RTCD_PAIR_MOTION ? rtcd_bodies_motion(p.bodies[0], p.bodies[1], last_poses_.data(),
+                                                                         poses_.data(), scale_0.radius, scale_1.radius)
+                                                    : 0.0;
+      lane.motions = lane.motions || (p.flags & RTCD_PAIR_MOTION) != 0;
+    }
+    const double motion = lane.pair_motion;
     const rtcd_job_setup made = rtcd_direction_setup(&p, d, pair_first_item, motion, config_flags(config_),
                                                      &limit_settings_, shape_0, shape_1, &scale_0, &scale_1);
     if (job.motion != motion || std::memcmp(&made, &s, sizeof(s)) != 0)
@@ -860,9 +865,7 @@ class OpenClExecutor final : public RayExecutor {
       d.before_written = std::exchange(d.poses_written, step_);
       write(d, d.poses, poses_);
     }
-    const bool motions = std::any_of(lane.host_setups.begin(), lane.host_setups.end(),
-                                     [](const rtcd_pair_setup& p) { return (p.flags & RTCD_PAIR_MOTION) != 0; });
-    if (motions && d.before_written != step_ - 1) {  // the device had no job last step
+    if (lane.motions && d.before_written != step_ - 1) {  // the device had no job last step
       write(d, d.before, last_poses_);
       d.before_written = step_ - 1;
     }
