@@ -440,8 +440,9 @@ def pocl_avalanche_rows():
             raise ResultError(f"{where}: no '# {key}:' line")
         stamp[key] = found.group(1).strip()
     detect = {"new": [], "embree": [], "gimpact": [], "fcl": []}
+    to_floor = "KB to the devices, floor \\(64 × bodies \\+ 16 × pairs\\)"
     traffic = {"KB to the devices": [], "KB from the devices": [], "KB recovery reads": [],
-               "reports \\(contacts \\+ predictive rays\\)": []}
+               "reports \\(contacts \\+ predictive rays\\)": [], to_floor: []}
     pairs = {"A": [], "B": [], "C": []}
     for section in re.split(r"^## ", text, flags=re.M)[1:]:
         who = section.split()[0]
@@ -469,7 +470,7 @@ def pocl_avalanche_rows():
         value += " (one thread, the same steps: " + ", ".join(peers) + ")"
     by_phase = {phase: {name: statistics.median(v[k] for v in values) for name, values in traffic.items()}
                 for k, phase in enumerate("ABC")}
-    up, down, recovery, reports = by_phase["C"].values()
+    _, down, recovery, reports, _ = by_phase["C"].values()
     bound = (64 * reports + 16 * statistics.median(pairs["C"])) / 1e6
 
     def from_device(phase):
@@ -478,13 +479,18 @@ def pocl_avalanche_rows():
         floor = (64 * t["reports \\(contacts \\+ predictive rays\\)"] + 16 * statistics.median(pairs[phase])) / 1e6
         return f"{phase} {t['KB from the devices'] / 1000:.2f}, floor {floor:.2f}"
 
+    def to_device(phase):
+        """A phase's bytes to the device a step and their floor, in MB."""
+        t = by_phase[phase]
+        return f"{t['KB to the devices'] / 1000:.2f}, floor {t[to_floor] / 1000:.2f}"
+
     return [Row("avalanche phase C detect on PoCL: OpenCL on one `basic` device ÷ Embree on one thread (floor 1.5×)",
                 value, "opencl", source, [stamp]),
             Row("avalanche phase C, bytes a step on PoCL: from the device (floor: 64 × (contacts + predictive rays) + "
                 "16 × pairs, from the same run; phases B and A beside it); the walk starts' recovery reads, apart; to the "
-                "device (floor: 64 × bodies + 16 × pairs)",
+                "device (floor: 64 × bodies + 16 × pairs; B and A beside it)",
                 f"{down / 1000:.2f} MB (floor {bound:.2f} MB; {from_device('B')}; {from_device('A')}); "
-                f"{recovery / 1000:.2f} MB; {up / 1000:.2f} MB",
+                f"{recovery / 1000:.2f} MB; {to_device('C')} MB (B {to_device('B')}; A {to_device('A')})",
                 "opencl", source, [stamp])]
 
 

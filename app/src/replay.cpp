@@ -20,14 +20,15 @@ struct Sum {
   std::string name;
   uint64_t steps = 0, peak_step = 0;
   double detect = 0, prepare = 0, full = 0, walks = 0, gather = 0, peak = 0;
-  size_t pairs = 0, pairs_full = 0, fallbacks = 0, contacts = 0, predictive = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
+  size_t bodies = 0, pairs = 0, pairs_full = 0, fallbacks = 0, contacts = 0, predictive = 0, judged = 0, deep = 0, missed = 0, false_rays = 0;
   size_t missed_pairs = 0, truth_checked = 0, over_reports = 0;
   size_t certified = 0, granted = 0, expired = 0;
   RayCounts counts;
   DeviceWork devices;  // device backends: over the devices and steps
 
-  void add(uint64_t step, const experiments::ReplayStep& s) {
+  void add(uint64_t step, const experiments::ReplayStep& s, size_t step_bodies) {
     ++steps;
+    bodies += step_bodies;
     detect += s.seconds;
     prepare += s.seconds_prepare;
     full += s.seconds_full;
@@ -115,8 +116,14 @@ void print_device_traffic(const std::vector<Sum>& sums) {
   row("writes", work(&DeviceWork::writes, 1), " %.1f |");
   row("reads", work(&DeviceWork::reads, 1), " %.1f |");
   row("blocking waits", work(&DeviceWork::waits, 1), " %.1f |");
+  // The most a device step should move: 64 bytes a body and
+  // 16 a pair up; 64 a report and 16 a pair down, recovery apart.
   row("KB to the devices", work(&DeviceWork::bytes_to_device, 1e-3), " %.1f |");
+  row("KB to the devices, floor (64 × bodies + 16 × pairs)",
+      [](const Sum& s) { return 1e-3 * double(64 * s.bodies + 16 * s.pairs); }, " %.1f |");
   row("KB from the devices", work(&DeviceWork::bytes_from_device, 1e-3), " %.1f |");
+  row("KB from the devices, floor (64 × reports + 16 × pairs)",
+      [](const Sum& s) { return 1e-3 * double(64 * (s.contacts + s.predictive) + 16 * s.pairs); }, " %.1f |");
   row("KB recovery reads", work(&DeviceWork::bytes_recovery, 1e-3), " %.1f |");
   // What a step must bring back at least: its records.
   row("reports (contacts + predictive rays)", [](const Sum& s) { return double(s.contacts + s.predictive); }, " %.0f |");
@@ -172,17 +179,17 @@ int run_replay(const ReplayOptions& o) {
     Sum sum;
     sum.name = phase == '-' ? "before A" : std::string(1, phase);
     for (uint64_t k = 0; k < run.steps.size(); ++k)
-      if (phases.of(k) == phase) sum.add(k, run.steps[k]);
+      if (phases.of(k) == phase) sum.add(k, run.steps[k], recording.steps()[k].bodies);
     if (sum.steps > 0) sums.push_back(sum);
   }
   if (o.last > 0) {
     Sum& tail = sums.emplace_back();
     tail.name = "last " + std::to_string(o.last);
-    for (uint64_t k = run.steps.size() - o.last; k < run.steps.size(); ++k) tail.add(k, run.steps[k]);
+    for (uint64_t k = run.steps.size() - o.last; k < run.steps.size(); ++k) tail.add(k, run.steps[k], recording.steps()[k].bodies);
   }
   Sum& all = sums.emplace_back();
   all.name = "all";
-  for (uint64_t k = 0; k < run.steps.size(); ++k) all.add(k, run.steps[k]);
+  for (uint64_t k = 0; k < run.steps.size(); ++k) all.add(k, run.steps[k], recording.steps()[k].bodies);
   for (const Sum& s : sums) print_row(s, ours);
   if (!ours) {
     std::printf("\nMeans per step; detect: every pair's collide, one thread; contacts as the library reports them (a peer has no stages or rays).\n");
