@@ -125,10 +125,13 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
           sent.push_back(p);
         }
       }
-      std::vector<rtcd_uint> list(refs.size() * RTCD_PAIR_REF_WORDS + (walking ? sent : setups).size() * 8);
-      std::memcpy(list.data(), refs.data(), refs.size() * sizeof(rtcd_pair_ref));
-      std::memcpy(list.data() + refs.size() * RTCD_PAIR_REF_WORDS, (walking ? sent : setups).data(),
-                  (walking ? sent : setups).size() * sizeof(rtcd_pair_setup));
+      std::vector<rtcd_uint> list;  // the references' words, then the sent setups'
+      const auto append = [&list](const auto& records) {
+        const auto* words = reinterpret_cast<const rtcd_uint*>(records.data());
+        list.insert(list.end(), words, words + records.size() * sizeof(records[0]) / sizeof(rtcd_uint));
+      };
+      append(refs);
+      append(walking ? sent : setups);
       list.push_back(0);  // no empty buffer
       std::vector<rtcd_pair_setup> made(pairs);
       std::vector<rtcd_uint> first_items(2 * pairs + 1, 0xdeadbeef);
