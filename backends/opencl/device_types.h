@@ -6,6 +6,7 @@
 #include "rtcd/kernel/bvh.h"
 #include "rtcd/kernel/fold.h"
 #include "rtcd/kernel/job.h"
+#include "rtcd/kernel/near.h"
 #include "rtcd/kernel/tally.h"
 #include "rtcd/kernel/tracer.h"
 
@@ -21,7 +22,9 @@ typedef struct {
   rtcd_uint first_primitive; /* the BVH's triangle list */
   rtcd_uint first_source;    /* ray origins and directions, the items' leaves, the leaves' items */
   rtcd_uint source_count;
-  rtcd_uint first_leaf;         /* the source tree's leaves' item ranges */
+  rtcd_uint first_source_node; /* its source tree's nodes (rtcd_source_node) and their leaf numbers */
+  rtcd_uint source_node_count;
+  rtcd_uint first_value; /* its distance bound's grid values */
   float radius;             /* sphere */
   rtcd_vec3 half_extents;   /* box */
 } rtcd_device_shape;
@@ -106,6 +109,24 @@ RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint leaf
     else hi = mid;
   }
   return lo < rtcd_near_count(near) && rtcd_near_entry(near, lo) == leaf;
+}
+
+/* A pair of a full batch as the host sends it: its bodies and flags (no
+ * RTCD_JOB_ITERATIVE); the device finds its items (rtcd_prepare). */
+typedef struct {
+  rtcd_uint bodies[2];
+  rtcd_uint flags;
+} rtcd_full_pair;
+
+RTCD_INLINE rtcd_pair_setup rtcd_setup_of_full(rtcd_full_pair f) {
+  rtcd_pair_setup s;
+  s.bodies[0] = f.bodies[0];
+  s.bodies[1] = f.bodies[1];
+  s.flags = f.flags;
+  s.moved = 0.0f;
+  s.item_count[0] = s.item_count[1] = 0;
+  s.first[0] = s.first[1] = 0;
+  return s;
 }
 
 /* rtcd_pair_setup's words, and where its item counts are among them. */

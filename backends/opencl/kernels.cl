@@ -71,39 +71,29 @@ RTCD_INLINE float rtcd_tracer_distance2(const rtcd_tracer* t, rtcd_int triangle,
 
 #include "rtcd/kernel/trace.h"
 
-/* The job holding item (or ray) i: the last job whose first index is <= i. */
-RTCD_INLINE rtcd_uint rtcd_job_of(__global const rtcd_uint* firsts, rtcd_uint job_count, rtcd_uint i) {
-  rtcd_uint lo = 0, hi = job_count;
-  while (hi - lo > 1) {
-    rtcd_uint mid = (lo + hi) / 2;
-    if (firsts[mid] <= i) lo = mid;
-    else hi = mid;
-  }
-  return lo;
-}
-
-/* Lists of near leaves this long or shorter are merged (rtcd_merge_leaves). */
+/* A full job's near leaves (source-tree nodes) are merged this many at
+ * most (rtcd_merge_leaves); past it they are written as bits and every
+ * source item is tested. */
 #define RTCD_NEAR_MERGE 32u
 
-/* The items of a list of at most RTCD_NEAR_MERGE leaves, `count` in all,
- * in increasing order: a merge of the leaves' item lists (each in order,
- * `ranges` of `items`, by leaf), the least head next. */
-RTCD_INLINE void rtcd_merge_leaves(__global const rtcd_uint* near, __global const rtcd_uint* items,
-                                   __global const rtcd_uint* ranges, __global rtcd_uint* out, rtcd_uint count) {
+/* The items of `leaf_count` (at most RTCD_NEAR_MERGE) leaves, in
+ * increasing order: a merge of the leaves' item lists (each in order, its
+ * node's range of `items`), the least head next. */
+RTCD_INLINE void rtcd_merge_leaves(const rtcd_uint* leaves, rtcd_uint leaf_count, __global const rtcd_uint* items,
+                                   __global const rtcd_source_node* nodes, __global rtcd_uint* out) {
   rtcd_uint at[RTCD_NEAR_MERGE], end[RTCD_NEAR_MERGE], head[RTCD_NEAR_MERGE];
-  rtcd_uint runs = 0, r, n;
-  for (r = 0; r < rtcd_near_count(near); ++r) {
-    const rtcd_uint leaf = rtcd_near_entry(near, r);
-    at[runs] = ranges[2 * leaf];
-    end[runs] = ranges[2 * leaf + 1];
+  rtcd_uint runs = 0, r, n = 0;
+  for (r = 0; r < leaf_count; ++r) {
+    at[runs] = nodes[leaves[r]].begin;
+    end[runs] = nodes[leaves[r]].end;
     if (at[runs] == end[runs]) continue;
     head[runs] = items[at[runs]];
     ++runs;
   }
-  for (n = 0; n < count && runs > 0; ++n) {
+  while (runs > 0) {
     rtcd_uint least = 0;
     for (r = 1; r < runs; ++r) least = head[r] < head[least] ? r : least;
-    out[n] = head[least];
+    out[n++] = head[least];
     if (++at[least] < end[least]) {
       head[least] = items[at[least]];
     } else { /* the last run takes its place */
@@ -115,29 +105,107 @@ RTCD_INLINE void rtcd_merge_leaves(__global const rtcd_uint* near, __global cons
   }
 }
 
+/* The batch's items the device counted (`items`, rtcd_prepare), up to the
+ * room the host made: the launches over items may be larger. */
+RTCD_INLINE rtcd_uint rtcd_items_in(__global const rtcd_uint* items, rtcd_uint room) { return min(*items, room); }
+
 #ifdef RTCD_HAS_DOUBLE
+/* What a device reads to find a full job's items: the shapes' source
+ * trees (rtcd_source_node, by first_source_node), the items of their
+ * leaves (by first_source) and each item's and node's leaf number, the
+ * distance bounds (by shape) and their grids' values (by first_value). */
+typedef struct {
+  __global const rtcd_device_shape* shapes;
+  __global const rtcd_source_node* nodes;
+  __global const rtcd_uint* leaf_items;
+  __global const rtcd_uint* source_leaves;
+  __global const rtcd_uint* leaf_of_node;
+  __global const rtcd_distance_grid* grids;
+  __global const float* values;
+} rtcd_near_data;
+
+/* A full job's near leaves (kernel/near.h's search of its source tree, as
+ * the CPU executors run it): the leaves near its candidate box, their
+ * nodes in `list`, or, past RTCD_NEAR_MERGE, as bits at `bits` (room for
+ * every leaf of the shape and a header). Returns how many items they hold;
+ * *listed is how many leaves were found, up to RTCD_NEAR_MERGE + 1. */
+RTCD_INLINE rtcd_uint rtcd_near_find(const rtcd_near_data* data, const rtcd_device_job* job,
+                                     const rtcd_shape_traits* source_traits, const rtcd_frame* frame,
+                                     rtcd_uint* list, rtcd_uint* listed, __global rtcd_uint* bits) {
+  const rtcd_device_shape shape = data->shapes[job->source];
+  const rtcd_distance_grid grid = data->grids[job->target];
+  __global const float* values = data->values + data->shapes[job->target].first_value;
+  __global const rtcd_uint* leaf_of_node = data->leaf_of_node + shape.first_source_node;
+  rtcd_uint leaf, count = 0, w;
+  rtcd_source_tree tree;
+  rtcd_near_search search;
+  tree.nodes = data->nodes + shape.first_source_node;
+  tree.order = data->leaf_items + shape.first_source; /* each leaf's in order: the same kinds at its ends */
+  tree.node_count = shape.source_node_count;
+  tree.first_edge = source_traits->first_edge;
+  tree.sphere = source_traits->sphere_radius > 0.0f;
+  rtcd_near_begin(&search, frame, rtcd_edge_reach(&job->params), &tree);
+  *listed = 0;
+  while ((leaf = rtcd_near_next(&search, &tree, &grid, values)) != RTCD_NO_LEAF) {
+    count += tree.nodes[leaf].end - tree.nodes[leaf].begin;
+    if (*listed < RTCD_NEAR_MERGE) {
+      list[(*listed)++] = leaf;
+      continue;
+    }
+    if (*listed == RTCD_NEAR_MERGE) { /* the list is full: bits from here on */
+      bits[0] = RTCD_NEAR_BITS;
+      /* a binary tree of n nodes has (n + 1) / 2 leaves */
+      for (w = 0; w < ((shape.source_node_count + 1) / 2 + 31) / 32; ++w) bits[1 + w] = 0;
+      for (w = 0; w < RTCD_NEAR_MERGE; ++w) bits[1 + leaf_of_node[list[w]] / 32] |= 1u << (leaf_of_node[list[w]] % 32);
+      ++*listed;
+    }
+    bits[1 + leaf_of_node[leaf] / 32] |= 1u << (leaf_of_node[leaf] % 32);
+  }
+  return count;
+}
+
+/* The items of the leaves rtcd_near_find found, in item order, at `out`:
+ * a merge of a list, or every item of the source tested against bits. */
+RTCD_INLINE void rtcd_near_list(const rtcd_near_data* data, rtcd_uint source, const rtcd_uint* list,
+                                rtcd_uint listed, __global const rtcd_uint* bits, __global rtcd_uint* out) {
+  const rtcd_device_shape shape = data->shapes[source];
+  rtcd_uint v, n = 0;
+  if (listed <= RTCD_NEAR_MERGE) {
+    rtcd_merge_leaves(list, listed, data->leaf_items + shape.first_source, data->nodes + shape.first_source_node, out);
+    return;
+  }
+  for (v = 0; v < shape.source_count; ++v)
+    if (rtcd_near_leaf(bits, data->source_leaves[shape.first_source + v])) out[n++] = v;
+}
+
 /* One job, before its items, made from its pair's setup (job j is
  * direction j % 2 of pair j / 2) as the host makes it: its limits from the
  * pair's motion (from its bodies' poses of the last step, `before`, to
  * this step's: rtcd_pair_motion), the configuration's limit settings and
- * its bodies' shapes' scales (rtcd_derive_limits), its parameters (rtcd_make_params) with its
- * first item (rtcd_offsets), and its frame from its bodies' poses
- * (rtcd_relative_frame); for a full job, the source items
- * (origins, then edges) of its near leaves, in item order, listed as its
- * items (the host counted them): a short list of leaves by merging their
- * items (each leaf's in order), bits by testing every item. */
+ * its bodies' shapes' scales (rtcd_derive_limits), its parameters
+ * (rtcd_make_params) and its frame from its bodies' poses
+ * (rtcd_relative_frame). A walking job's items are its tracked rays, from
+ * its first item (rtcd_pair_list); a full job finds its own
+ * (rtcd_near_items) and takes room for them in the batch's item list
+ * from `items` on (an atomic count, so jobs lie in any order, each its
+ * items in order), while they fit in `room`; past it the count still grows,
+ * and the host runs the batch again with room for it. Each item's job goes
+ * to `item_jobs`. */
 __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job_count, rtcd_uint config,
                            double displacement_threshold, double distance_extension, rtcd_uint max_walk_steps,
                            rtcd_uint limits_set, __global const rtcd_device_shape* shapes,
                            __global const rtcd_shape_traits* traits, __global const rtcd_box* bounds,
-                           __global const rtcd_shape_scale* scales, __global const rtcd_uint* source_leaves,
-                           __global const rtcd_uint* leaf_items, __global const rtcd_uint* leaf_ranges,
-                           __global const rtcd_uint* near, __global const rtcd_pose* poses,
-                           __global const rtcd_pose* before, __global const rtcd_uint* body_shapes,
-                           __global rtcd_device_job* jobs, __global const rtcd_uint* first_items,
-                           __global rtcd_frame* frames, __global rtcd_uint* vertices) {
+                           __global const rtcd_shape_scale* scales, __global const rtcd_source_node* source_nodes,
+                           __global const rtcd_uint* leaf_items, __global const rtcd_uint* source_leaves,
+                           __global const rtcd_uint* leaf_of_node, __global const rtcd_distance_grid* grids,
+                           __global const float* grid_values, __global rtcd_uint* near, rtcd_uint near_stride,
+                           __global const rtcd_pose* poses, __global const rtcd_pose* before,
+                           __global const rtcd_uint* body_shapes, __global rtcd_device_job* jobs,
+                           __global const rtcd_uint* first_items, __global rtcd_frame* frames,
+                           volatile __global rtcd_uint* items, rtcd_uint room, __global rtcd_uint* vertices,
+                           __global rtcd_uint* item_jobs) {
   rtcd_uint j = get_global_id(0);
-  rtcd_uint v, n, count, shape_0, shape_1;
+  rtcd_uint k, shape_0, shape_1;
   double motion = 0.0;
   rtcd_pair_setup pair;
   rtcd_limit_settings settings;
@@ -148,7 +216,8 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   rtcd_pose source, target;
   rtcd_box source_bounds, target_bounds;
   rtcd_frame frame;
-  __global const rtcd_uint* leaves;
+  rtcd_near_data data;
+  rtcd_uint list[RTCD_NEAR_MERGE], listed;
   if (j >= job_count) return;
   pair = setups[j / 2];
   settings.displacement_threshold = displacement_threshold;
@@ -161,42 +230,47 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   scale_1 = scales[shape_1];
   if (pair.flags & RTCD_PAIR_MOTION)
     motion = rtcd_bodies_motion(pair.bodies[0], pair.bodies[1], before, poses, scale_0.radius, scale_1.radius);
-  s = rtcd_direction_setup(&pair, j % 2, first_items[j - j % 2], motion, config, &settings, shape_0, shape_1,
-                           &scale_0, &scale_1);
+  s = rtcd_direction_setup(&pair, j % 2, (pair.flags & RTCD_JOB_ITERATIVE) ? first_items[j - j % 2] : 0u, motion,
+                           config, &settings, shape_0, shape_1, &scale_0, &scale_1);
   source_traits = traits[s.source];
   target_traits = traits[s.target];
   source_bounds = bounds[s.source];
   target_bounds = bounds[s.target];
   job = rtcd_device_job_of(config, &s, &source_traits, &target_traits, &target_bounds);
-  jobs[j] = job;
   source = poses[s.source_body];
   target = poses[s.target_body];
   rtcd_relative_frame(&source, &target, &source_bounds, &target_bounds, s.extension, &frame);
   frames[j] = frame;
-  if (job.params.iterative || job.item_count == 0) return;
-  near += job.first_near;
-  if (near[0] != RTCD_NEAR_BITS && rtcd_near_count(near) <= RTCD_NEAR_MERGE) {
-    rtcd_merge_leaves(near, leaf_items + shapes[job.source].first_source,
-                      leaf_ranges + 2 * shapes[job.source].first_leaf, vertices + job.first_item,
-                      job.item_count);
-    return;
+  if (!job.params.iterative) {
+    data.shapes = shapes;
+    data.nodes = source_nodes;
+    data.leaf_items = leaf_items;
+    data.source_leaves = source_leaves;
+    data.leaf_of_node = leaf_of_node;
+    data.grids = grids;
+    data.values = grid_values;
+    near += (size_t)j * near_stride;
+    job.item_count = rtcd_near_find(&data, &job, &source_traits, &frame, list, &listed, near);
+    job.first_item = job.item_count > 0 ? atomic_add(items, job.item_count) : 0u;
+    if (job.item_count > room || job.first_item > room - job.item_count) { /* past the room: the host runs it again */
+      job.item_count = 0;
+      job.first_item = 0;
+    } else if (job.item_count > 0) {
+      rtcd_near_list(&data, job.source, list, listed, near, vertices + job.first_item);
+    }
   }
-  leaves = source_leaves + shapes[job.source].first_source;
-  count = shapes[job.source].source_count;
-  n = job.first_item;
-  for (v = 0; v < count; ++v)
-    if (rtcd_near_leaf(near, leaves[v])) vertices[n++] = v;
+  jobs[j] = job;
+  for (k = 0; k < job.item_count; ++k) item_jobs[job.first_item + k] = j;
 }
 
 /* Item i: the possible ray placed in the target's frame (rtcd_place_ray, in
  * double) as candidate c; 1 when it is a candidate. */
 RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jobs,
-                                 __global const rtcd_uint* first_items, __global const rtcd_frame* frames,
-                                 rtcd_uint job_count, __global const rtcd_device_shape* shapes,
-                                 __global const rtcd_vec3* origins, __global const rtcd_vec3* directions,
-                                 __global const rtcd_uint* vertices, __global const rtcd_tracked* tracked,
-                                 rtcd_candidate* c) {
-  rtcd_uint j = rtcd_job_of(first_items, job_count, i);
+                                 __global const rtcd_uint* item_jobs, __global const rtcd_frame* frames,
+                                 __global const rtcd_device_shape* shapes, __global const rtcd_vec3* origins,
+                                 __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
+                                 __global const rtcd_tracked* tracked, rtcd_candidate* c) {
+  rtcd_uint j = item_jobs[i];
   rtcd_device_job job = jobs[j];
   rtcd_frame frame;
   rtcd_uint s;
@@ -220,17 +294,17 @@ RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jo
 
 /* Compacted layout, one item: placed and flagged, for rtcd_count and
  * rtcd_scatter. */
-__kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const rtcd_uint* first_items,
-                          __global const rtcd_frame* frames, rtcd_uint job_count, rtcd_uint item_count,
+__kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const rtcd_uint* item_jobs,
+                          __global const rtcd_frame* frames, __global const rtcd_uint* items, rtcd_uint room,
                           __global const rtcd_device_shape* shapes, __global const rtcd_vec3* origins,
                           __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
                           __global const rtcd_tracked* tracked, __global rtcd_uchar* flags,
                           __global rtcd_candidate* staging) {
   rtcd_uint i = get_global_id(0);
   rtcd_candidate c;
-  if (i >= item_count) return;
-  flags[i] = (rtcd_uchar)rtcd_select_item(i, jobs, first_items, frames, job_count, shapes, origins, directions,
-                                          vertices, tracked, &c);
+  if (i >= rtcd_items_in(items, room)) return;
+  flags[i] = (rtcd_uchar)rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices, tracked,
+                                          &c);
   staging[i] = c;
 }
 #endif
@@ -316,23 +390,26 @@ __kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count
 }
 
 /* The batch's pairs' setups (rtcd_prepare reads them) from what the host
- * sent, `list`: its setups, or, for a walking batch (ref_count pairs), a
- * reference a pair and the setups the references without
- * RTCD_PAIR_RESIDENT name; a resident pair's setup is its row of the last
- * step's pair table (`before`: its bodies and its kept rays, which it walks
- * whole) with the reference's flags and motion. Then the batch's item list
- * from the setups' item counts, as rtcd_offsets. One work-group. */
+ * sent, `list`: for a full batch (ref_count 0) a rtcd_full_pair a pair,
+ * whose items the device finds (rtcd_prepare counts them into `items`,
+ * 0 from here); for a walking batch (ref_count pairs), a reference a pair
+ * and the setups the references without RTCD_PAIR_RESIDENT name, a
+ * resident pair's setup its row of the last step's pair table (`before`:
+ * its bodies and its kept rays, which it walks whole) with the reference's
+ * flags and motion, and then the batch's item list from the setups' item
+ * counts, as rtcd_offsets, its length in `items`. One work-group. */
 __kernel void rtcd_pair_list(__global const rtcd_uint* list, rtcd_uint job_count, rtcd_uint ref_count,
                              __global const rtcd_pair_setup* before, __global rtcd_pair_setup* setups,
-                             __global rtcd_uint* first_items) {
+                             __global rtcd_uint* first_items, __global rtcd_uint* items) {
   __local rtcd_uint partial[RTCD_SCAN_WIDTH];
+  __global const rtcd_full_pair* full = (__global const rtcd_full_pair*)list;
   __global const rtcd_pair_ref* refs = (__global const rtcd_pair_ref*)list;
   __global const rtcd_pair_setup* sent = (__global const rtcd_pair_setup*)(list + ref_count * RTCD_PAIR_REF_WORDS);
   rtcd_uint p;
   for (p = get_local_id(0); p < job_count / 2; p += get_local_size(0)) {
     rtcd_pair_setup s;
     if (ref_count == 0) {
-      s = sent[p];
+      s = rtcd_setup_of_full(full[p]);
     } else {
       const rtcd_pair_ref r = refs[p];
       const rtcd_uint slot = r.slot_flags >> RTCD_PAIR_FLAG_BITS, flags = r.slot_flags & RTCD_PAIR_MAX_FLAGS;
@@ -346,19 +423,20 @@ __kernel void rtcd_pair_list(__global const rtcd_uint* list, rtcd_uint job_count
     }
     setups[p] = s;
   }
-  barrier(CLK_GLOBAL_MEM_FENCE);
+  barrier(CLK_GLOBAL_MEM_FENCE); /* a full batch's counts are 0: its first items too */
   rtcd_scan_counts((__global const rtcd_uint*)setups, job_count, first_items,
                    RTCD_PAIR_COUNTS_WORD, RTCD_PAIR_SETUP_WORDS, partial);
+  if (get_local_id(0) == 0) *items = first_items[job_count];
 }
 
 /* One item: a candidate moves to its place in the batch's ray list. */
-__kernel void rtcd_scatter(__global const rtcd_uint* first_items, __global const rtcd_uint* first_rays,
-                           rtcd_uint job_count, rtcd_uint item_count, __global const rtcd_uchar* flags,
+__kernel void rtcd_scatter(__global const rtcd_uint* item_jobs, __global const rtcd_uint* first_rays,
+                           __global const rtcd_uint* items, rtcd_uint room, __global const rtcd_uchar* flags,
                            __global const rtcd_uint* slots, __global const rtcd_candidate* staging,
                            __global rtcd_candidate* rays) {
   rtcd_uint i = get_global_id(0);
-  if (i >= item_count || !flags[i]) return;
-  rays[first_rays[rtcd_job_of(first_items, job_count, i)] + slots[i]] = staging[i];
+  if (i >= rtcd_items_in(items, room) || !flags[i]) return;
+  rays[first_rays[item_jobs[i]] + slots[i]] = staging[i];
 }
 
 /* One candidate ray: its full trace, or its walks (trace.h). */
@@ -435,17 +513,16 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
                                __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                                __global const rtcd_bvh_node* nodes, __global const rtcd_bvh_wide_node* wide,
                                __global const rtcd_uint* primitives,
-                               __global const rtcd_uint* first_items, __global const rtcd_frame* frames,
-                               rtcd_uint job_count, rtcd_uint item_count, __global const rtcd_vec3* origins,
+                               __global const rtcd_uint* item_jobs, __global const rtcd_frame* frames,
+                               __global const rtcd_uint* items, rtcd_uint room, __global const rtcd_vec3* origins,
                                __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
                                __global const rtcd_tracked* tracked, __global rtcd_uchar* flags,
                                __global rtcd_outcome* outcomes) {
   rtcd_uint i = get_global_id(0);
   rtcd_candidate c;
   int flag;
-  if (i >= item_count) return;
-  flag = rtcd_select_item(i, jobs, first_items, frames, job_count, shapes, origins, directions, vertices, tracked,
-                          &c);
+  if (i >= rtcd_items_in(items, room)) return;
+  flag = rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices, tracked, &c);
   flags[i] = (rtcd_uchar)flag;
   if (!flag) return;
   outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces,
@@ -454,9 +531,9 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
 #endif
 
 /* A job's rays, in order: its flagged items (grid layout) or its compacted
- * rays. The first, and one past the last. */
-#define RTCD_JOB_RAYS(j, grid, firsts, counts) \
-  first = firsts[j];                            \
+ * rays (`firsts` and `counts` by job). The first, and one past the last. */
+#define RTCD_JOB_RAYS(j, grid, firsts, counts)      \
+  first = (grid) ? jobs[j].first_item : firsts[j]; \
   end = first + ((grid) ? jobs[j].item_count : counts[j])
 
 /* One job's outcomes counted (kernel/tally.h) for rtcd_total. */

@@ -52,6 +52,7 @@
 #include <cstddef>
 #include <cstring>
 #include <iostream>
+#include <limits>
 #include <mutex>
 #include <utility>
 
@@ -68,7 +69,7 @@ static_assert(sizeof(rtcd_vec3) == sizeof(Eigen::Vector3f));
 // The kernels read the buffers with OpenCL C's layout of the same structs:
 // only 4-byte members (8 in rtcd_frame), so no padding differs.
 static_assert(sizeof(rtcd_outcome) == 32 && sizeof(rtcd_candidate) == 40 && sizeof(rtcd_trace_params) == 72);
-static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 60 && sizeof(rtcd_bvh_node) == 36);
+static_assert(sizeof(rtcd_device_job) == 96 && sizeof(rtcd_device_shape) == 68 && sizeof(rtcd_bvh_node) == 36);
 static_assert(sizeof(rtcd_report) == 40 && sizeof(rtcd_job_summary) == 8 && sizeof(rtcd_tally) == 8 * 24);
 static_assert(sizeof(rtcd_frame) == 144 && alignof(rtcd_frame) == 8 &&
               sizeof(rtcd_bvh_wide_node) == 32 * RTCD_BVH_WIDTH);
@@ -80,6 +81,8 @@ static_assert(sizeof(rtcd_job_setup) == 64 && sizeof(rtcd_pair_setup) == 32 && a
 static_assert(RTCD_PAIR_SETUP_WORDS * sizeof(rtcd_uint) == sizeof(rtcd_pair_setup) &&
               RTCD_PAIR_COUNTS_WORD * sizeof(rtcd_uint) == offsetof(rtcd_pair_setup, item_count) &&
               RTCD_PAIR_REF_WORDS * sizeof(rtcd_uint) == sizeof(rtcd_pair_ref) && alignof(rtcd_pair_ref) == 4 &&
+              sizeof(rtcd_full_pair) == 12 && alignof(rtcd_full_pair) == 4 &&
+              sizeof(rtcd_distance_grid) == 104 && sizeof(rtcd_source_node) == 36 &&
               RTCD_NO_SLOT == Residence::kNoRecord);
 static_assert((RTCD_JOB_ITERATIVE | RTCD_PAIR_EDGES(0) | RTCD_PAIR_EDGES(1) | RTCD_PAIR_MOTION | RTCD_PAIR_RESIDENT) ==
               RTCD_PAIR_MAX_FLAGS);
@@ -98,7 +101,8 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
-  kPrimitives, kOrigins, kDirections, kSourceLeaves, kLeafItems, kLeafRanges, kBounds, kTraits, kScales
+  kPrimitives, kOrigins, kDirections, kSourceNodes, kLeafItems, kSourceLeaves, kLeafOfNode, kGrids, kGridValues,
+  kBounds, kTraits, kScales
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -106,8 +110,8 @@ constexpr size_t kTracedShapeBuffers = kOrigins;
 // buffers they use. A step's two batches have a lane each, so the full
 // batch runs on the device while the walks are set up.
 struct Lane {
-  GrowingBuffer list, setups, jobs, first_items, frames, near, vertices, flags, staging, slots, counts, first_rays, rays,
-      outcomes;
+  GrowingBuffer list, setups, jobs, first_items, frames, near, items_found, item_jobs, vertices, flags, staging, slots,
+      counts, first_rays, rays, outcomes;
   GrowingBuffer tallies, laid_out, summaries, total, reports;
   // The jobs it runs (batch indices) and their host-side data.
   std::vector<uint32_t> batch_jobs;
@@ -118,6 +122,18 @@ struct Lane {
   // a pair, then the setups of those not resident; `list` the words sent.
   std::vector<rtcd_pair_ref> host_refs;
   std::vector<rtcd_uint> host_list;
+  // A full batch on a device that finds its items (device_counts): its
+  // pairs as sent, and its jobs with an overlap to search; room is made for
+  // `items` of them (a guess from most_items_per_job, at most item_bound,
+  // the searched sources' items), and the device's count comes back
+  // (found).
+  bool device_counts = false;
+  std::vector<rtcd_full_pair> host_full;
+  uint32_t searched_jobs = 0;
+  uint64_t item_bound = 0;
+  double most_items_per_job = 0;  // over its past batches
+  std::vector<rtcd_uint> host_found;  // one
+  uint32_t found = 0;
   double pair_motion = 0;  // the last pair's, while its setup is checked (add_direction)
   bool motions = false;    // a pair derives its motion from the last step's poses (RTCD_PAIR_MOTION)
   uint32_t setups_sent = 0;            // after the references
@@ -134,11 +150,12 @@ struct Lane {
   std::vector<rtcd_uint> host_first_kept;
   std::vector<rtcd_report> host_reports;
   std::vector<rtcd_tracked> host_kept;  // the host placed the rays: it reads them whole
-  uint32_t items = 0, ray_count = 0, report_count = 0;
+  uint32_t items = 0, ray_count = 0, report_count = 0;  // items: room for them where the device counts
   // The reports it expects: its jobs' last where they ran before, and
-  // reports_per_item for the items of the others.
+  // reports_per_item for the items of the others (guessed where the device
+  // counts them).
   uint32_t known_reports = 0;
-  size_t unknown_items = 0;
+  size_t unknown_items = 0, unknown_jobs = 0;
   // The reports are read before they are counted, up to report_bound
   // (expected_reports).
   uint32_t report_bound = 0;
@@ -413,9 +430,10 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.neighbors),  upload_once(data_.zero_area),  upload_once(data_.normals),
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
-                upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_leaves),
-                upload_once(data_.leaf_items), upload_once(data_.leaf_ranges),
-                upload_once(data_.bounds),     upload_once(data_.traits),     upload_once(data_.scales)};
+                upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_nodes),
+                upload_once(data_.leaf_items), upload_once(data_.source_leaves), upload_once(data_.leaf_of_node),
+                upload_once(data_.grids),      upload_once(data_.grid_values), upload_once(data_.bounds),
+                upload_once(data_.traits),     upload_once(data_.scales)};
     d.shapes_uploaded = data_.table.size();
   }
 
@@ -523,6 +541,11 @@ class OpenClExecutor final : public RayExecutor {
       lane.host_setups.clear();
       lane.host_refs.clear();
       lane.setups_sent = 0;
+      lane.device_counts = runtime_->place_on_device && which == 0;
+      lane.host_full.clear();
+      lane.searched_jobs = 0;
+      lane.item_bound = 0;
+      lane.found = 0;
       lane.motions = false;
       lane.slot_base = RTCD_NO_SLOT;
       lane.host_frames.clear();
@@ -534,6 +557,7 @@ class OpenClExecutor final : public RayExecutor {
       lane.upload_base = runtime_->place_on_device ? d.kept_used[(step_ + 1) % 2] : 0;
       lane.known_reports = 0;
       lane.unknown_items = 0;
+      lane.unknown_jobs = 0;
       lane.pending = false;
       lane.ran = false;
     }
@@ -557,15 +581,40 @@ class OpenClExecutor final : public RayExecutor {
       for (uint32_t k : {j, j + 1}) add(d.lanes[which], k, jobs[k], config);
       refer(d.lanes[which], jobs[j], jobs[j + 1]);
     }
+    for (Device& d : devices_)
+      if (Lane& lane = d.lanes[which]; lane.device_counts) lane.items = item_room(lane, lane.searched_jobs);
+  }
+
+  // Room for a full batch's items before the device counts them: as many a
+  // searched job as the most its lane's batches have held so far, and half
+  // again; all its sources' items (a bound) in its first batch, and never
+  // more. A batch they outgrow runs again (rerun_outgrown).
+  static uint32_t item_room(const Lane& lane, double jobs) {
+    const double guess = lane.most_items_per_job > 0 ? 1.5 * lane.most_items_per_job * jobs + 64 : 1e300;
+    const uint64_t room = std::min<double>(guess, double(lane.item_bound));
+    if (room > std::numeric_limits<uint32_t>::max()) throw Error("a device batch holds at most 2^32 - 1 items");
+    return uint32_t(room);
   }
 
   // A job's items: its tracked rays, or the items (origins and edges) of its near leaves.
   // Their count is also the rays it is expected to cast, by which jobs are
   // spread over the devices.
+  // Where the device counts a full job's items, its count here is 0 and its
+  // sources' item count (a bound) goes to the lane's room and load.
   void add(Lane& lane, uint32_t j, const RayJob& job, const Config& config) {
     rtcd_device_job dj{};
     dj.params = make_trace_params(job, *shapes_[job.source], *shapes_[job.target], config);
-    const size_t items = job.overlap.empty() ? 0 : job.iterative ? job.tracked.size() : mark_near_leaves(lane, job, dj);
+    const bool searched = lane.device_counts && !job.overlap.empty();
+    const size_t items = job.overlap.empty() || lane.device_counts ? 0
+                         : job.iterative                            ? job.tracked.size()
+                                                                    : mark_near_leaves(lane, job, dj);
+    if (searched) {
+      const size_t bound = data_.table[job.source].source_count;
+      ++lane.searched_jobs;
+      lane.item_bound += bound;
+      lane.load += bound;
+      lane.unknown_jobs += !(job.residence && job.residence->placed);
+    }
     dj.source = job.source;
     dj.target = job.target;
     dj.first_item = lane.items;
@@ -613,10 +662,17 @@ class OpenClExecutor final : public RayExecutor {
     const uint32_t d = (lane.batch_jobs.size() - 1) % 2;
     const rtcd_uint first = s.flags & RTCD_JOB_ITERATIVE ? s.first_tracked : s.first_near;
     const rtcd_uint edges = s.flags & RTCD_JOB_EDGES ? RTCD_PAIR_EDGES(d) : 0u;
-    if (d == 0) {
+    if (d == 0 && lane.device_counts) {  // what the device makes of what is sent
+      const rtcd_uint motion = job.motion_measured ? RTCD_PAIR_MOTION : 0u;
+      lane.host_full.push_back({{s.source_body, s.target_body}, (s.flags & RTCD_JOB_ITERATIVE) | edges | motion});
+      lane.host_setups.push_back(rtcd_setup_of_full(lane.host_full.back()));
+    } else if (d == 0) {
       const rtcd_uint motion = job.motion_measured ? RTCD_PAIR_MOTION : 0u;
       lane.host_setups.push_back({{s.source_body, s.target_body}, (s.flags & RTCD_JOB_ITERATIVE) | edges | motion,
                                   s.moved, {s.item_count, 0}, {first, 0}});
+    } else if (lane.device_counts) {
+      lane.host_full.back().flags |= edges;
+      lane.host_setups.back().flags |= edges;
     } else {
       rtcd_pair_setup& p = lane.host_setups.back();
       p.flags |= edges;
@@ -665,7 +721,7 @@ class OpenClExecutor final : public RayExecutor {
   // items they hold.
   size_t mark_near_leaves(Lane& lane, const RayJob& job, rtcd_device_job& dj) const {
     const RaySources& rs = shapes_[job.source]->sources();
-    const rtcd_uint* leaf_of_node = data_.leaf_of_node.data() + data_.first_node[job.source];
+    const rtcd_uint* leaf_of_node = data_.leaf_of_node.data() + data_.table[job.source].first_source_node;
     lane.leaves.clear();
     size_t items = 0;
     const DistanceBound& bound = shapes_[job.target]->distance_bound();
@@ -813,6 +869,10 @@ class OpenClExecutor final : public RayExecutor {
     lane.report_bound = std::min<uint32_t>(count, uint32_t(1.25 * expected_reports(d, lane)) + 64);
     read(d, lane.total, lane.host_total);
     read(d, lane.summaries, lane.host_summaries);
+    if (lane.device_counts) {
+      lane.host_found.resize(1);
+      read(d, lane.items_found, lane.host_found);
+    }
     if (!runtime_->place_on_device) {
       lane.host_kept.resize(count);
       read(d, kept, lane.kept_base, lane.host_kept, 0, count);
@@ -840,16 +900,9 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.outcomes, lane.items * sizeof(rtcd_outcome));
     cl::Kernel& k = d.trace_items;
     const cl_uint next = bind_jobs_and_shapes(d, lane, k);
-    k.setArg(next, lane.first_items.buffer);
-    k.setArg(next + 1, lane.frames.buffer);
-    k.setArg(next + 2, rtcd_uint(lane.host_jobs.size()));
-    k.setArg(next + 3, rtcd_uint(lane.items));
-    k.setArg(next + 4, d.shapes[kOrigins]);
-    k.setArg(next + 5, d.shapes[kDirections]);
-    k.setArg(next + 6, lane.vertices.buffer);
-    k.setArg(next + 7, d.kept[(step_ + 1) % 2].buffer);
-    k.setArg(next + 8, lane.flags.buffer);
-    k.setArg(next + 9, lane.outcomes.buffer);
+    set_args(k, next, lane.item_jobs.buffer, lane.frames.buffer, lane.items_found.buffer, rtcd_uint(lane.items),
+             d.shapes[kOrigins], d.shapes[kDirections], lane.vertices.buffer, d.kept[(step_ + 1) % 2].buffer,
+             lane.flags.buffer, lane.outcomes.buffer);
     launch(d, k, lane.items);
     settle(d, lane, lane.first_items, lane.items);
   }
@@ -885,32 +938,26 @@ class OpenClExecutor final : public RayExecutor {
     d.kept_used[(step_ + 1) % 2] = lane.upload_base + rtcd_uint(lane.host_tracked.size());
     reserve(lane.flags, lane.items);
     reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
-    reserve(lane.near, 1);  // unread by walks
-    if (!lane.host_jobs.front().params.iterative) write(d, lane.near, lane.host_near);
+    reserve(lane.item_jobs, lane.items * sizeof(rtcd_uint));
+    // Room for each full job's near leaves as bits (rtcd_near_find).
+    const rtcd_uint near_stride = lane.device_counts ? 1 + (data_.most_leaves + 31) / 32 : 0;
+    reserve(lane.near, size_t(jobs_count) * near_stride * sizeof(rtcd_uint));
     cl::Kernel& p = d.prepare;
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
              l.distance_extension, l.max_walk_steps, l.set, d.shapes[kTable], d.shapes[kTraits], d.shapes[kBounds],
-             d.shapes[kScales], d.shapes[kSourceLeaves], d.shapes[kLeafItems], d.shapes[kLeafRanges],
-             lane.near.buffer, d.poses.buffer, d.before.buffer, d.body_shapes.buffer, lane.jobs.buffer,
-             lane.first_items.buffer, lane.frames.buffer, lane.vertices.buffer);
+             d.shapes[kScales], d.shapes[kSourceNodes], d.shapes[kLeafItems], d.shapes[kSourceLeaves],
+             d.shapes[kLeafOfNode], d.shapes[kGrids], d.shapes[kGridValues], lane.near.buffer, near_stride,
+             d.poses.buffer, d.before.buffer, d.body_shapes.buffer, lane.jobs.buffer, lane.first_items.buffer,
+             lane.frames.buffer, lane.items_found.buffer, rtcd_uint(lane.items), lane.vertices.buffer,
+             lane.item_jobs.buffer);
     launch(d, p, jobs_count);
     if (grid(lane)) return;
     reserve(lane.staging, lane.items * sizeof(rtcd_candidate));
-    cl::Kernel& s = d.select;
-    s.setArg(0, lane.jobs.buffer);
-    s.setArg(1, lane.first_items.buffer);
-    s.setArg(2, lane.frames.buffer);
-    s.setArg(3, jobs_count);
-    s.setArg(4, rtcd_uint(lane.items));
-    s.setArg(5, d.shapes[kTable]);
-    s.setArg(6, d.shapes[kOrigins]);
-    s.setArg(7, d.shapes[kDirections]);
-    s.setArg(8, lane.vertices.buffer);
-    s.setArg(9, tracked.buffer);
-    s.setArg(10, lane.flags.buffer);
-    s.setArg(11, lane.staging.buffer);
-    launch(d, s, lane.items);
+    set_args(d.select, 0, lane.jobs.buffer, lane.item_jobs.buffer, lane.frames.buffer, lane.items_found.buffer,
+             rtcd_uint(lane.items), d.shapes[kTable], d.shapes[kOrigins], d.shapes[kDirections], lane.vertices.buffer,
+             tracked.buffer, lane.flags.buffer, lane.staging.buffer);
+    launch(d, d.select, lane.items);
     reserve(lane.slots, lane.items * sizeof(rtcd_uint));
     reserve(lane.counts, jobs_count * sizeof(rtcd_uint));
     cl::Kernel& c = d.count;
@@ -930,7 +977,9 @@ class OpenClExecutor final : public RayExecutor {
   // item list (rtcd_pair_list); rows for them in the step's pair table.
   void send_pairs(Device& d, Lane& lane) {
     const auto jobs_count = rtcd_uint(lane.host_jobs.size());
-    if (lane.host_refs.empty()) {
+    if (lane.device_counts) {
+      write(d, lane.list, lane.host_full);
+    } else if (lane.host_refs.empty()) {
       write(d, lane.list, lane.host_setups);
     } else {
       const auto words = [](const auto& v) { return std::as_bytes(std::span(v)).size() / sizeof(rtcd_uint); };
@@ -948,8 +997,10 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.setups, lane.host_setups.size() * sizeof(rtcd_pair_setup));
     reserve(lane.first_items, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
     reserve(d.pair_table[(step_ + 1) % 2], 1);  // unread by a full batch
+    reserve(lane.items_found, sizeof(rtcd_uint));
     set_args(d.pair_list, 0, lane.list.buffer, jobs_count, rtcd_uint(lane.host_refs.size()),
-             d.pair_table[(step_ + 1) % 2].buffer, lane.setups.buffer, lane.first_items.buffer);
+             d.pair_table[(step_ + 1) % 2].buffer, lane.setups.buffer, lane.first_items.buffer,
+             lane.items_found.buffer);
     launch_group(d, d.pair_list);
     uint32_t& rows = d.rows_used[step_ % 2];
     if (lane.host_setups.size() > RTCD_PAIR_MAX_SLOT - rows)
@@ -963,16 +1014,9 @@ class OpenClExecutor final : public RayExecutor {
   // with no count known on the host (the launch covers every item).
   void trace_compacted(Device& d, Lane& lane) {
     reserve(lane.rays, lane.items * sizeof(rtcd_candidate));
-    cl::Kernel& k = d.scatter;
-    k.setArg(0, lane.first_items.buffer);
-    k.setArg(1, lane.first_rays.buffer);
-    k.setArg(2, rtcd_uint(lane.host_jobs.size()));
-    k.setArg(3, rtcd_uint(lane.items));
-    k.setArg(4, lane.flags.buffer);
-    k.setArg(5, lane.slots.buffer);
-    k.setArg(6, lane.staging.buffer);
-    k.setArg(7, lane.rays.buffer);
-    launch(d, k, lane.items);
+    set_args(d.scatter, 0, lane.item_jobs.buffer, lane.first_rays.buffer, lane.items_found.buffer,
+             rtcd_uint(lane.items), lane.flags.buffer, lane.slots.buffer, lane.staging.buffer, lane.rays.buffer);
+    launch(d, d.scatter, lane.items);
     enqueue_trace(d, lane, lane.items);
     settle(d, lane, lane.first_rays, lane.items);
   }
@@ -982,7 +1026,8 @@ class OpenClExecutor final : public RayExecutor {
   // walked or traced again), the last full batch's reports per item for
   // the items of new pairs.
   static double expected_reports(const Device& d, const Lane& lane) {
-    return lane.known_reports + d.lanes[0].reports_per_item * double(lane.unknown_items);
+    const double unknown = double(lane.unknown_items) + lane.most_items_per_job * double(lane.unknown_jobs);
+    return lane.known_reports + d.lanes[0].reports_per_item * unknown;
   }
 
   // After the wait: each job's first kept ray from the summaries, and the
@@ -996,21 +1041,40 @@ class OpenClExecutor final : public RayExecutor {
     for (size_t l = 0; l < jobs; ++l) {
       const rtcd_job_summary& s = lane.host_summaries[l];
       // The device's counts place what the host reads: they must fit.
-      if (s.kept_origins > s.kept || s.kept > lane.host_jobs[l].item_count)
+      if (s.kept_origins > s.kept || s.kept > (lane.device_counts ? lane.found : lane.host_jobs[l].item_count))
         throw Error("a device returned inconsistent counts for job " + std::to_string(l));
       lane.host_first_kept[l] = rtcd_uint(kept);
       kept += s.kept;
     }
     const uint64_t rays = total.candidates + total.edges_tested, reports = total.contacts + total.predictive;
-    if (kept != total.kept || rays > lane.items || reports > kept)
+    if (kept != total.kept || rays > lane.found || reports > kept)
       throw Error("a device returned inconsistent counts for a batch");
     lane.host_first_kept[jobs] = rtcd_uint(kept);
     lane.ray_count = uint32_t(rays);
     lane.report_count = uint32_t(reports);
-    lane.reports_per_item = double(reports) / lane.items;
+    lane.reports_per_item = lane.found > 0 ? double(reports) / lane.found : 0.0;
     if (reports <= lane.report_bound) return false;
     read(d, lane.reports, 0, lane.host_reports, lane.report_bound, reports - lane.report_bound, &last);
     return true;
+  }
+
+  // After the wait, the device's count of a full batch's items: past the
+  // room made for them, the batch runs again with room for them all (and
+  // the host waits again); its first run's kept rays and pair rows are left
+  // unused. Then the most items a searched job that the lane has seen.
+  void rerun_outgrown(Device& d, Lane& lane) {
+    if (!lane.pending || !lane.device_counts) return;
+    const uint32_t found = lane.host_found[0];
+    if (found > lane.item_bound) throw Error("a device found more items than its jobs' sources hold");
+    if (lane.searched_jobs > 0)
+      lane.most_items_per_job = std::max(lane.most_items_per_job, double(found) / lane.searched_jobs);
+    if (found > lane.items) {
+      lane.items = found;
+      enqueue(d, lane, false);
+      wait(d, lane.outcomes_read);
+      if (lane.host_found[0] != found) throw Error("a device found other items when it ran a batch again");
+    }
+    lane.found = found;
   }
 
   // One device's share of a batch, enqueued and flushed; nothing waits.
@@ -1020,6 +1084,7 @@ class OpenClExecutor final : public RayExecutor {
   void enqueue(Device& d, Lane& lane, bool inject_mid_step) {
     lane.host_counts.assign(lane.host_jobs.size(), 0);
     lane.ray_count = 0;
+    lane.found = lane.items;  // where the device counts, known after the wait
     if (lane.items == 0) return;
     upload_shapes(d);
     if (!runtime_->place_on_device) {
@@ -1055,6 +1120,7 @@ class OpenClExecutor final : public RayExecutor {
       if (lane.pending) last = &lane;
     if (!last) return;
     wait(d, last->outcomes_read);
+    rerun_outgrown(d, d.lanes[0]);
     cl::Event rest;
     bool more = false;
     for (Lane& lane : d.lanes)
@@ -1160,7 +1226,7 @@ class OpenClExecutor final : public RayExecutor {
       const uint32_t j = lane.batch_jobs[l];
       const RayJob& job = batch.jobs[j];
       const rtcd_device_job& dj = lane.host_jobs[l];
-      d.work.jobs += dj.item_count > 0;
+      d.work.jobs += lane.device_counts ? !job.overlap.empty() : dj.item_count > 0;
       std::vector<RayOutcome>& out = batch.outcomes[j];
       RayTally& tally = batch.tallies[j];
       tally = {};

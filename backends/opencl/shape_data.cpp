@@ -5,6 +5,7 @@
 #include "bvh.hpp"
 #include "rtcd/cpu_executor.hpp"
 #include "rtcd/error.hpp"
+#include "rtcd/near_search.hpp"
 
 namespace rtcd::opencl {
 
@@ -26,20 +27,22 @@ void ShapeData::add(const Shape& shape, const ShapeScale& scale, bool bvh) {
   }
   source_leaves.resize(origins.size(), 0);
   if (rs.order.size() != rs.item_count()) throw Error("a shape's ray sources are not indexed (RaySources::index)");
-  d.first_leaf = rtcd_uint(leaf_ranges.size() / 2);
-  first_node.push_back(rtcd_uint(leaf_of_node.size()));
+  d.first_source_node = rtcd_uint(source_nodes.size());
+  d.source_node_count = rtcd_uint(rs.nodes.size());
+  const rtcd_source_tree tree = kernel_tree(rs);
+  source_nodes.insert(source_nodes.end(), tree.nodes, tree.nodes + tree.node_count);
   leaf_items.insert(leaf_items.end(), rs.order.begin(), rs.order.end());
   rtcd_uint leaves = 0;
   for (uint32_t n = 0; n < rs.nodes.size(); ++n) {
     const RaySources::Node& node = rs.nodes[n];
     leaf_of_node.push_back(node.child == 0 ? leaves : ~rtcd_uint(0));  // inner nodes have none
     if (node.child != 0) continue;
-    leaf_ranges.insert(leaf_ranges.end(), {node.begin, node.end});
     for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = leaves;
     std::sort(leaf_items.begin() + d.first_source + node.begin, leaf_items.begin() + d.first_source + node.end);
     ++leaves;
   }
   leaf_counts.push_back(leaves);
+  most_leaves = std::max(most_leaves, leaves);
   if (const Mesh* mesh = shape.mesh()) {
     d.kind = RTCD_TARGET_MESH;
     d.triangle_count = rtcd_uint(mesh->triangle_count());
@@ -71,6 +74,11 @@ void ShapeData::add(const Shape& shape, const ShapeScale& scale, bool bvh) {
   } else {
     d.kind = RTCD_TARGET_HALFSPACE;
   }
+  const DistanceBound& bound = shape.distance_bound();
+  d.first_value = rtcd_uint(grid_values.size());
+  const std::span<const float> values = DistanceBoundKernel::values(bound);
+  grid_values.insert(grid_values.end(), values.begin(), values.end());
+  grids.push_back(DistanceBoundKernel::grid(bound));
   table.push_back(d);
   bounds.push_back(to_kernel(shape.bounds()));
   traits.push_back(shape_traits(shape));

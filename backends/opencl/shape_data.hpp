@@ -17,15 +17,20 @@ struct ShapeData {
   std::vector<rtcd_shape_traits> traits;  // per shape: what its jobs' parameters read
   std::vector<rtcd_shape_scale> scales;   // per shape: what its pairs' limits read
   std::vector<rtcd_vec3> positions, normals, origins, directions;
-  // The source trees' leaves, numbered a shape in node order: per item
-  // its leaf; the leaves' items, each leaf's in increasing order, as one
-  // list a shape (its place by first_source), and each leaf's range of that
-  // list (begin, end; by first_leaf): a device lists a full job's items
-  // from its few near leaves instead of testing every item.
-  std::vector<rtcd_uint> source_leaves, leaf_items, leaf_ranges;
-  // On the host: each shape's leaf count and, from its first_node on, each
-  // source-tree node's leaf number (the search finds nodes).
-  std::vector<rtcd_uint> leaf_counts, first_node, leaf_of_node;
+  // The source trees (kernel/near.h) and their leaves, numbered a shape in
+  // node order: per item its leaf; the items, each leaf's in increasing
+  // order, as one list a shape (by first_source), which the nodes' ranges
+  // index; per node its leaf number (by first_source_node; the search
+  // finds nodes). A device searches a full job's near leaves and lists
+  // their items instead of testing every item.
+  std::vector<rtcd_source_node> source_nodes;
+  std::vector<rtcd_uint> source_leaves, leaf_items, leaf_of_node;
+  std::vector<rtcd_uint> leaf_counts;  // per shape
+  rtcd_uint most_leaves = 0;           // of any shape
+  // Per shape, its distance bound, which the searches read; the grids'
+  // values one after another (by first_value).
+  std::vector<rtcd_distance_grid> grids;
+  std::vector<float> grid_values;
   // Fold guards: ring_first rebased into the one ring list, with a
   // closing entry after the last mesh's triangles.
   std::vector<rtcd_fold_face> fold_faces;

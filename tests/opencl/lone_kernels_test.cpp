@@ -110,9 +110,14 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
       SCOPED_TRACE(std::string(walking ? "walking, " : "full, ") + std::to_string(pairs) + " pairs");
       std::vector<rtcd_pair_setup> setups(pairs), sent;
       std::vector<rtcd_pair_ref> refs;
+      std::vector<rtcd_full_pair> full;  // a full batch sends bodies and flags; its items are found later
       for (rtcd_pair_setup& p : setups) {
         p = random_setup();
-        if (!walking) continue;
+        if (!walking) {
+          full.push_back({{p.bodies[0], p.bodies[1]}, p.flags});
+          p = rtcd_setup_of_full(full.back());
+          continue;
+        }
         const rtcd_uint row = word(g) % (2 * table.size());
         if (row < table.size()) {  // resident: the row's but for flags and motion
           const rtcd_pair_setup flags_and_motion = p;
@@ -131,11 +136,13 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
         list.insert(list.end(), words, words + records.size() * sizeof(records[0]) / sizeof(rtcd_uint));
       };
       append(refs);
-      append(walking ? sent : setups);
+      if (walking) append(sent);
+      else append(full);
       list.push_back(0);  // no empty buffer
       std::vector<rtcd_pair_setup> made(pairs);
-      std::vector<rtcd_uint> first_items(2 * pairs + 1, 0xdeadbeef);
+      std::vector<rtcd_uint> first_items(2 * pairs + 1, 0xdeadbeef), items(1, 0xdeadbeef);
       const cl::Buffer made_buffer = buffer_of(*rt, made), firsts_buffer = buffer_of(*rt, first_items);
+      const cl::Buffer items_buffer = buffer_of(*rt, items);
       const cl::Buffer list_buffer = buffer_of(*rt, list), table_buffer = buffer_of(*rt, table);
       cl::Kernel k(rt->program, "rtcd_pair_list");
       k.setArg(0, list_buffer);
@@ -144,6 +151,7 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
       k.setArg(3, table_buffer);
       k.setArg(4, made_buffer);
       k.setArg(5, firsts_buffer);
+      k.setArg(6, items_buffer);
       const cl::Device& device = rt->devices.front();
       const size_t group = std::min(kGroupSize, k.getWorkGroupInfo<CL_KERNEL_WORK_GROUP_SIZE>(device));
       cl::CommandQueue queue(rt->context, device);
@@ -151,6 +159,7 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
       queue.finish();
       read_back(*rt, made_buffer, made);
       read_back(*rt, firsts_buffer, first_items);
+      read_back(*rt, items_buffer, items);
       rtcd_uint sum = 0;
       for (size_t p = 0; p < pairs; ++p) {
         ASSERT_EQ(std::memcmp(&made[p], &setups[p], sizeof(rtcd_pair_setup)), 0) << "pair " << p;
@@ -159,6 +168,8 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
         sum += setups[p].item_count[0] + setups[p].item_count[1];
       }
       EXPECT_EQ(first_items[2 * pairs], sum);
+      EXPECT_EQ(items[0], sum) << "the batch's item count";
+      if (!walking) EXPECT_EQ(sum, 0u);
     }
   }
 }
@@ -355,18 +366,34 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     k.setArg(4, settings.distance_extension);
     k.setArg(5, settings.max_walk_steps);
     k.setArg(6, settings.set);
+    // Walks: the full jobs' source trees, distance bounds, near leaves and item list unread.
+    const rtcd_uint item_total = first_items.back() + pairs.back().item_count[1];
+    std::vector<rtcd_uint> item_jobs(item_total, 0xdeadbeef), items{item_total};
+    const cl::Buffer item_jobs_buffer = buffer_of(*rt, item_jobs);
     const cl::Buffer args[] = {buffer_of(*rt, table),  buffer_of(*rt, traits), buffer_of(*rt, bounds),
                                buffer_of(*rt, scales), buffer_of(*rt, unused), buffer_of(*rt, unused),
-                               buffer_of(*rt, unused), buffer_of(*rt, unused),
-                               buffer_of(*rt, poses),  buffer_of(*rt, before), buffer_of(*rt, body_shapes),
-                               jobs_buffer,            firsts_buffer,          frames_buffer,
-                               buffer_of(*rt, unused)};
-    for (cl_uint i = 0; i < 15; ++i) k.setArg(i + 7, args[i]);
+                               buffer_of(*rt, unused), buffer_of(*rt, unused), buffer_of(*rt, unused),
+                               buffer_of(*rt, unused), buffer_of(*rt, unused)};
+    cl_uint next = 7;
+    for (const cl::Buffer& b : args) k.setArg(next++, b);
+    k.setArg(next++, rtcd_uint(0));  // near leaves' stride
+    const cl::Buffer rest[] = {buffer_of(*rt, poses), buffer_of(*rt, before), buffer_of(*rt, body_shapes),
+                               jobs_buffer,           firsts_buffer,          frames_buffer,
+                               buffer_of(*rt, items)};
+    for (const cl::Buffer& b : rest) k.setArg(next++, b);
+    k.setArg(next++, item_total);  // room
+    const cl::Buffer vertices_buffer = buffer_of(*rt, unused);
+    k.setArg(next++, vertices_buffer);
+    k.setArg(next++, item_jobs_buffer);
     queue.enqueueNDRangeKernel(k, cl::NullRange, cl::NDRange((kJobs + kGroupSize - 1) / kGroupSize * kGroupSize),
                                cl::NDRange(kGroupSize));
     queue.finish();
     read_back(*rt, jobs_buffer, jobs);
     read_back(*rt, frames_buffer, frames);
+    read_back(*rt, item_jobs_buffer, item_jobs);
+    for (size_t j = 0; j < kJobs; ++j)
+      for (rtcd_uint n = 0; n < pairs[j / 2].item_count[j % 2]; ++n)
+        ASSERT_EQ(item_jobs[first_items[j] + n], j) << "item " << n << " of job " << j;
     for (size_t j = 0; j < kJobs; ++j) {
       const rtcd_job_setup& s = setups[j];
       const rtcd_device_job job =

@@ -431,12 +431,12 @@ TEST(OpenCl, WalksReadBackReportsWholeAndWalkStartsOnlyForRecovery) {
 // A full step reads its reports up to a bound from each pair's reports the
 // step before (where the pair ran before: a pair's reports change little
 // from step to step), and the rest, if any, after a second wait; the
-// counters and a summary a job besides.
+// counters, the batch's item count and a summary a job besides.
 TEST(OpenCl, FullStepsReadReportsUpToTheirPairsLastCount) {
   const size_t pairs = 16;
   const auto steps = run_scene("opencl:devices=1", {"concave", Mode::full, pairs, 6});
   expect_ran_on_devices(steps, 1);
-  constexpr size_t kCounters = 8 * 24, kSummary = 8, kReport = 40;
+  constexpr size_t kCounters = 8 * 24, kSummary = 8, kReport = 40, kItemCount = 4;
   size_t short_bounds = 0;
   for (size_t s = 1; s < steps.size(); ++s) {
     SCOPED_TRACE("step " + std::to_string(s));
@@ -445,7 +445,8 @@ TEST(OpenCl, FullStepsReadReportsUpToTheirPairsLastCount) {
     ASSERT_EQ(st.pairs_full, pairs);
     const size_t bound = size_t(1.25 * double(last.contacts.size() + last.predictive.size())) + 64;
     const size_t reports = steps[s].contacts.size() + steps[s].predictive.size();
-    EXPECT_EQ(st.bytes_from_device, kCounters + kSummary * 2 * pairs + kReport * std::max(bound, reports));
+    EXPECT_EQ(st.bytes_from_device,
+              kCounters + kItemCount + kSummary * 2 * pairs + kReport * std::max(bound, reports));
     EXPECT_EQ(st.device_waits, reports > bound ? 2u : 1u);
     short_bounds += reports > bound;
   }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstddef>
+#include <span>
 #include <type_traits>
 
 #include "rtcd/distance_bound.hpp"
@@ -15,7 +16,7 @@ namespace rtcd {
 // A DistanceBound as the kernel reads it.
 struct DistanceBoundKernel {
   static rtcd_distance_grid grid(const DistanceBound& bound);
-  static const float* values(const DistanceBound& bound) { return bound.values_.data(); }
+  static std::span<const float> values(const DistanceBound& bound) { return bound.values_; }
 };
 
 // The kernel reads RaySources::Node in place.
@@ -44,7 +45,7 @@ void visit_near_leaves(const rtcd_frame& frame, const RaySources& sources, const
                        const VisitNode& visit_node) {
   const rtcd_source_tree tree = kernel_tree(sources);
   const rtcd_distance_grid grid = DistanceBoundKernel::grid(target);
-  const float* values = DistanceBoundKernel::values(target);
+  const float* values = DistanceBoundKernel::values(target).data();
   rtcd_near_search search;
   rtcd_near_begin(&search, &frame, reach, &tree);
   for (rtcd_uint n = rtcd_near_next(&search, &tree, &grid, values); n != RTCD_NO_LEAF;
