@@ -106,7 +106,9 @@ RTCD_INLINE void rtcd_merge_leaves(const rtcd_uint* leaves, rtcd_uint leaf_count
 }
 
 /* The batch's items the device counted (`items`, rtcd_prepare), up to the
- * room the host made: the launches over items may be larger. */
+ * room the host made: the launches over items may be larger. Within the
+ * room, a job that did not fit leaves items of no job (RTCD_NO_JOB). */
+#define RTCD_NO_JOB 0xffffffffu
 RTCD_INLINE rtcd_uint rtcd_items_in(__global const rtcd_uint* items, rtcd_uint room) { return min(*items, room); }
 
 #ifdef RTCD_HAS_DOUBLE
@@ -253,6 +255,7 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
     job.item_count = rtcd_near_find(&data, &job, &source_traits, &frame, list, &listed, near);
     job.first_item = job.item_count > 0 ? atomic_add(items, job.item_count) : 0u;
     if (job.item_count > room || job.first_item > room - job.item_count) { /* past the room: the host runs it again */
+      for (k = job.first_item; k < room; ++k) item_jobs[k] = RTCD_NO_JOB; /* items no job holds */
       job.item_count = 0;
       job.first_item = 0;
     } else if (job.item_count > 0) {
@@ -303,6 +306,10 @@ __kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const r
   rtcd_uint i = get_global_id(0);
   rtcd_candidate c;
   if (i >= rtcd_items_in(items, room)) return;
+  if (item_jobs[i] == RTCD_NO_JOB) {
+    flags[i] = 0;
+    return;
+  }
   flags[i] = (rtcd_uchar)rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices, tracked,
                                           &c);
   staging[i] = c;
@@ -522,6 +529,10 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
   rtcd_candidate c;
   int flag;
   if (i >= rtcd_items_in(items, room)) return;
+  if (item_jobs[i] == RTCD_NO_JOB) {
+    flags[i] = 0;
+    return;
+  }
   flag = rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices, tracked, &c);
   flags[i] = (rtcd_uchar)flag;
   if (!flag) return;

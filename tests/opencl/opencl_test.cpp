@@ -230,6 +230,46 @@ TEST(OpenCl, DevicesIdleLastStepDeriveTheMotionFromItsPoses) {
   EXPECT_GT(device[4].predictive.size(), 0u) << "the motion must show in the predictive rays";
 }
 
+// A device finds a full batch's items itself (rtcd_prepare), in room the
+// host made from the most items a job its batches held so far; a batch
+// that outgrows it is run again, at once, with room for all it found. Two
+// bodies touch at their boxes' edges for three steps (few items near the
+// overlap), then one moves into the other's middle: that step's batch
+// outgrows its room and runs again (a second wait, twice the launches),
+// the next fits; every step equals basic's, bit for bit.
+TEST(OpenCl, FullBatchesThatOutgrowTheirRoomRunAgain) {
+  const auto run = [](const std::string& backend) {
+    const Family f = validation::make_family("concave");
+    Config config;
+    config.mode = Mode::full;
+    auto narrow = make_narrow_phase(backend, config);
+    const ShapeId a = narrow->add_shape(f.a), b = narrow->add_shape(f.b);
+    const double touching = f.a->bounds().max.x() - f.b->bounds().min.x() - 0.02;
+    const auto at = [](double x) { return Pose{{x, 0, 0}, Eigen::Quaterniond::Identity()}; };
+    const BodyId first = narrow->add_body(a, Pose{}), second = narrow->add_body(b, at(touching));
+    const std::vector<BodyPair> pairs{{first, second}};
+    std::vector<StepResult> steps;
+    for (int step = 0; step < 5; ++step) {
+      narrow->set_pose(second, at(step < 3 ? touching : 0.1));
+      steps.push_back(narrow->detect(pairs));
+    }
+    return steps;
+  };
+  const auto device = run("opencl:devices=1"), cpu = run("basic");
+  expect_same_run(device, cpu);
+  const DeviceWork& before = device[2].stats.devices[0];
+  const DeviceWork& outgrown = device[3].stats.devices[0];
+  const DeviceWork& after = device[4].stats.devices[0];
+  for (size_t s = 0; s < device.size(); ++s) EXPECT_EQ(device[s].stats.cpu_fallback, "") << "step " << s;
+  EXPECT_EQ(before.waits, 1u);
+  // Its reports outgrow the bound guessed from the last step too: a third wait.
+  EXPECT_EQ(outgrown.waits, 3u) << "the batch outgrew its room: it runs again";
+  EXPECT_EQ(outgrown.launches, 2 * before.launches);
+  EXPECT_EQ(after.waits, 1u);
+  EXPECT_EQ(after.launches, before.launches);
+  EXPECT_GT(device[3].contacts.size(), 0u);
+}
+
 // The device's BVH traversal is plain C: checked on the host against the
 // brute force (bvh_answers.hpp), with the device's stack.
 TEST(Bvh, AnswersAsTheBruteForce) {
@@ -436,7 +476,7 @@ TEST(OpenCl, FullStepsReadReportsUpToTheirPairsLastCount) {
   const size_t pairs = 16;
   const auto steps = run_scene("opencl:devices=1", {"concave", Mode::full, pairs, 6});
   expect_ran_on_devices(steps, 1);
-  constexpr size_t kCounters = 8 * 24, kSummary = 8, kReport = 40, kItemCount = 4;
+  constexpr size_t kCounters = 8 * 24, kSummary = 8, kReport = 40, kItemCount = 4, kPose = 56, kFullPair = 12;
   size_t short_bounds = 0;
   for (size_t s = 1; s < steps.size(); ++s) {
     SCOPED_TRACE("step " + std::to_string(s));
@@ -448,6 +488,9 @@ TEST(OpenCl, FullStepsReadReportsUpToTheirPairsLastCount) {
     EXPECT_EQ(st.bytes_from_device,
               kCounters + kItemCount + kSummary * 2 * pairs + kReport * std::max(bound, reports));
     EXPECT_EQ(st.device_waits, reports > bound ? 2u : 1u);
+    // Up: every body's pose and a pair's bodies and flags (rtcd_full_pair);
+    // the device finds the pairs' items.
+    EXPECT_EQ(st.bytes_to_device, kPose * 2 * pairs + kFullPair * pairs);
     short_bounds += reports > bound;
   }
   EXPECT_GT(steps.back().contacts.size(), 64u) << "too few reports: the bound's guess would not matter";
