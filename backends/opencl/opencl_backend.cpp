@@ -586,11 +586,14 @@ class OpenClExecutor final : public RayExecutor {
   }
 
   // Room for a full batch's items before the device counts them: as many a
-  // searched job as the most its lane's batches have held so far, and half
-  // again; all its sources' items (a bound) in its first batch, and never
-  // more. A batch they outgrow runs again (rerun_outgrown).
+  // searched job as the most its lane's batches have held so far (a guess
+  // of kFirstItemsPerJob before any), and half again, but never more than
+  // all its sources' items (a bound). A batch that outgrows it runs again
+  // (rerun_outgrown).
   static uint32_t item_room(const Lane& lane, double jobs) {
-    const double guess = lane.most_items_per_job > 0 ? 1.5 * lane.most_items_per_job * jobs + 64 : 1e300;
+    constexpr double kFirstItemsPerJob = 64;
+    const double per_job = lane.most_items_per_job > 0 ? lane.most_items_per_job : kFirstItemsPerJob;
+    const double guess = 1.5 * per_job * jobs + 64;
     const uint64_t room = std::min<double>(guess, double(lane.item_bound));
     if (room > std::numeric_limits<uint32_t>::max()) throw Error("a device batch holds at most 2^32 - 1 items");
     return uint32_t(room);

@@ -501,8 +501,9 @@ TEST(OpenCl, FullStepsReadReportsUpToTheirPairsLastCount) {
 // list itself, the walks are enqueued behind it, and the host reads the
 // counts and the outcomes (up to a bound guessed from the last full batch)
 // after one wait. The first full batch has no guess (64 rays), so the rest
-// of its outcomes takes a second read and wait; the output is the CPU's
-// either way (the bit-for-bit suites).
+// of its outcomes takes a second read and wait, and its room for items is
+// a guess too (64 a job), which it may outgrow and run again after another;
+// the output is the CPU's either way (the bit-for-bit suites).
 TEST(OpenCl, StepsWaitOnce) {
   for (const Mode mode : {Mode::full, Mode::automatic}) {
     SCOPED_TRACE(mode_name(mode));
@@ -511,7 +512,8 @@ TEST(OpenCl, StepsWaitOnce) {
     const auto steps = run_scene("opencl:devices=1", scene);
     expect_ran_on_devices(steps, 1);
     ASSERT_GT(steps[0].stats.devices[0].rays, 64u);
-    EXPECT_EQ(steps[0].stats.devices[0].waits, 2u);
+    EXPECT_GE(steps[0].stats.devices[0].waits, 2u);
+    EXPECT_LE(steps[0].stats.devices[0].waits, 3u);
     size_t both = 0;
     for (size_t s = 1; s < steps.size(); ++s) {
       EXPECT_EQ(steps[s].stats.devices[0].waits, 1u) << "step " << s;
