@@ -40,7 +40,7 @@ typedef struct {
   rtcd_uint first_item;
   rtcd_uint item_count;
   rtcd_uint first_tracked; /* iterative jobs: the job's tracked rays */
-  rtcd_uint first_near;    /* full jobs: where its near leaves are (rtcd_near_leaf) */
+  rtcd_uint first_near;    /* full jobs placed on the host: where its near leaves are (rtcd_near_leaf) */
 } rtcd_device_job;
 
 #ifdef RTCD_HAS_DOUBLE
@@ -60,55 +60,15 @@ RTCD_INLINE rtcd_device_job rtcd_device_job_of(rtcd_uint config, const rtcd_job_
 }
 #endif
 
-/* A full job's near leaves as the host sends them (leaves numbered in
- * their source tree's node order), the shortest of three forms: a header
- * word RTCD_NEAR_BITS and one bit a leaf; a header word n and the n leaves
- * in increasing order, two to a word (the first in the low half), where
- * the shape has at most 65536 leaves; or a header RTCD_NEAR_WIDE | n and
- * a word a leaf. A job without items has none. */
-#define RTCD_NEAR_BITS 0xffffffffu
-#define RTCD_NEAR_WIDE 0x80000000u
-
-/* The words of the shortest form for n leaves of `leaf_count`. */
-RTCD_INLINE rtcd_uint rtcd_near_words(rtcd_uint n, rtcd_uint leaf_count) {
-  const rtcd_uint bits = 1 + (leaf_count + 31) / 32, list = 1 + (leaf_count <= 65536u ? (n + 1) / 2 : n);
-  return list < bits ? list : bits;
-}
-
-/* Writes n leaves (increasing) of `leaf_count` at `near`, in the shortest
- * form (rtcd_near_words of them, zeroed by the caller). */
-RTCD_INLINE void rtcd_near_write(const rtcd_uint* leaves, rtcd_uint n, rtcd_uint leaf_count, rtcd_uint* near) {
-  rtcd_uint k;
-  if (rtcd_near_words(n, leaf_count) == 1 + (leaf_count + 31) / 32 && n > 0) {
-    near[0] = RTCD_NEAR_BITS;
-    for (k = 0; k < n; ++k) near[1 + leaves[k] / 32] |= (rtcd_uint)1 << (leaves[k] % 32);
-  } else if (leaf_count <= 65536u) {
-    near[0] = n;
-    for (k = 0; k < n; ++k) near[1 + k / 2] |= leaves[k] << (16 * (k % 2));
-  } else {
-    near[0] = RTCD_NEAR_WIDE | n;
-    for (k = 0; k < n; ++k) near[1 + k] = leaves[k];
-  }
-}
-
-/* A list's length and its k-th leaf (not for bits). */
-RTCD_INLINE rtcd_uint rtcd_near_count(RTCD_GLOBAL const rtcd_uint* near) { return near[0] & ~RTCD_NEAR_WIDE; }
-RTCD_INLINE rtcd_uint rtcd_near_entry(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint k) {
-  if (near[0] & RTCD_NEAR_WIDE) return near[1 + k];
-  return (near[1 + k / 2] >> (16 * (k % 2))) & 0xffffu;
-}
+/* A full job's near leaves as bits, one a leaf (leaves numbered in their
+ * source tree's node order): where a device has more than it merges
+ * (rtcd_near_find), and where the host places the rays. Words a shape of
+ * `leaf_count` leaves needs: */
+RTCD_INLINE rtcd_uint rtcd_near_words(rtcd_uint leaf_count) { return (leaf_count + 31) / 32; }
 
 /* Whether a job's near leaves hold `leaf`. */
-RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* near, rtcd_uint leaf) {
-  rtcd_uint lo = 0, hi;
-  if (near[0] == RTCD_NEAR_BITS) return (int)((near[1 + leaf / 32] >> (leaf % 32)) & 1u);
-  hi = rtcd_near_count(near);
-  while (lo < hi) { /* the first listed leaf >= leaf */
-    rtcd_uint mid = lo + (hi - lo) / 2;
-    if (rtcd_near_entry(near, mid) < leaf) lo = mid + 1;
-    else hi = mid;
-  }
-  return lo < rtcd_near_count(near) && rtcd_near_entry(near, lo) == leaf;
+RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* bits, rtcd_uint leaf) {
+  return (int)((bits[leaf / 32] >> (leaf % 32)) & 1u);
 }
 
 /* A pair of a full batch as the host sends it: its bodies and flags (no

@@ -106,10 +106,12 @@ RTCD_INLINE void rtcd_merge_leaves(const rtcd_uint* leaves, rtcd_uint leaf_count
 }
 
 /* The batch's items the device counted (`items`, rtcd_prepare), up to the
- * room the host made: the launches over items may be larger. Within the
- * room, a job that did not fit leaves items of no job (RTCD_NO_JOB). */
+ * room the host made. Within the room, a job that did not fit leaves items
+ * of no job (RTCD_NO_JOB). The kernels over items or rays take them in
+ * strides of the launch (RTCD_FOR_EACH), whose size the host guesses. */
 #define RTCD_NO_JOB 0xffffffffu
 RTCD_INLINE rtcd_uint rtcd_items_in(__global const rtcd_uint* items, rtcd_uint room) { return min(*items, room); }
+#define RTCD_FOR_EACH(i, n) for (i = get_global_id(0); i < (n); i += get_global_size(0))
 
 #ifdef RTCD_HAS_DOUBLE
 /* What a device reads to find a full job's items: the shapes' source
@@ -129,8 +131,8 @@ typedef struct {
 /* A full job's near leaves (kernel/near.h's search of its source tree, as
  * the CPU executors run it): the leaves near its candidate box, their
  * nodes in `list`, or, past RTCD_NEAR_MERGE, as bits at `bits` (room for
- * every leaf of the shape and a header). Returns how many items they hold;
- * *listed is how many leaves were found, up to RTCD_NEAR_MERGE + 1. */
+ * every leaf of the shape: rtcd_near_words). Returns how many items they
+ * hold; *listed is how many leaves were found, up to RTCD_NEAR_MERGE + 1. */
 RTCD_INLINE rtcd_uint rtcd_near_find(const rtcd_near_data* data, const rtcd_device_job* job,
                                      const rtcd_shape_traits* source_traits, const rtcd_frame* frame,
                                      rtcd_uint* list, rtcd_uint* listed, __global rtcd_uint* bits) {
@@ -155,13 +157,12 @@ RTCD_INLINE rtcd_uint rtcd_near_find(const rtcd_near_data* data, const rtcd_devi
       continue;
     }
     if (*listed == RTCD_NEAR_MERGE) { /* the list is full: bits from here on */
-      bits[0] = RTCD_NEAR_BITS;
       /* a binary tree of n nodes has (n + 1) / 2 leaves */
-      for (w = 0; w < ((shape.source_node_count + 1) / 2 + 31) / 32; ++w) bits[1 + w] = 0;
-      for (w = 0; w < RTCD_NEAR_MERGE; ++w) bits[1 + leaf_of_node[list[w]] / 32] |= 1u << (leaf_of_node[list[w]] % 32);
+      for (w = 0; w < rtcd_near_words((shape.source_node_count + 1) / 2); ++w) bits[w] = 0;
+      for (w = 0; w < RTCD_NEAR_MERGE; ++w) bits[leaf_of_node[list[w]] / 32] |= 1u << (leaf_of_node[list[w]] % 32);
       ++*listed;
     }
-    bits[1 + leaf_of_node[leaf] / 32] |= 1u << (leaf_of_node[leaf] % 32);
+    bits[leaf_of_node[leaf] / 32] |= 1u << (leaf_of_node[leaf] % 32);
   }
   return count;
 }
@@ -295,7 +296,7 @@ RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jo
   return rtcd_place_item(&frame, &job.params, c->vertex, origins[s], directions[s], &c->origin, &c->direction);
 }
 
-/* Compacted layout, one item: placed and flagged, for rtcd_count and
+/* Compacted layout, each item: placed and flagged, for rtcd_count and
  * rtcd_scatter. */
 __kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const rtcd_uint* item_jobs,
                           __global const rtcd_frame* frames, __global const rtcd_uint* items, rtcd_uint room,
@@ -303,16 +304,18 @@ __kernel void rtcd_select(__global const rtcd_device_job* jobs, __global const r
                           __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
                           __global const rtcd_tracked* tracked, __global rtcd_uchar* flags,
                           __global rtcd_candidate* staging) {
-  rtcd_uint i = get_global_id(0);
+  const rtcd_uint n = rtcd_items_in(items, room);
+  rtcd_uint i;
   rtcd_candidate c;
-  if (i >= rtcd_items_in(items, room)) return;
-  if (item_jobs[i] == RTCD_NO_JOB) {
-    flags[i] = 0;
-    return;
+  RTCD_FOR_EACH(i, n) {
+    if (item_jobs[i] == RTCD_NO_JOB) {
+      flags[i] = 0;
+      continue;
+    }
+    flags[i] = (rtcd_uchar)rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices,
+                                            tracked, &c);
+    staging[i] = c;
   }
-  flags[i] = (rtcd_uchar)rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices, tracked,
-                                          &c);
-  staging[i] = c;
 }
 #endif
 
@@ -436,14 +439,16 @@ __kernel void rtcd_pair_list(__global const rtcd_uint* list, rtcd_uint job_count
   if (get_local_id(0) == 0) *items = first_items[job_count];
 }
 
-/* One item: a candidate moves to its place in the batch's ray list. */
+/* Each item: a candidate moves to its place in the batch's ray list. */
 __kernel void rtcd_scatter(__global const rtcd_uint* item_jobs, __global const rtcd_uint* first_rays,
                            __global const rtcd_uint* items, rtcd_uint room, __global const rtcd_uchar* flags,
                            __global const rtcd_uint* slots, __global const rtcd_candidate* staging,
                            __global rtcd_candidate* rays) {
-  rtcd_uint i = get_global_id(0);
-  if (i >= rtcd_items_in(items, room) || !flags[i]) return;
-  rays[first_rays[item_jobs[i]] + slots[i]] = staging[i];
+  const rtcd_uint n = rtcd_items_in(items, room);
+  rtcd_uint i;
+  RTCD_FOR_EACH(i, n) {
+    if (flags[i]) rays[first_rays[item_jobs[i]] + slots[i]] = staging[i];
+  }
 }
 
 /* One candidate ray: its full trace, or its walks (trace.h). */
@@ -490,9 +495,8 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
   return o;
 }
 
-/* Compacted layout: one work-item per candidate ray of the batch's list,
- * whose length (first_rays[job_count]) the device counted: the launch may
- * be larger. */
+/* Compacted layout: each candidate ray of the batch's list, whose length
+ * (first_rays[job_count]) the device counted, traced. */
 __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                          __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                          __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
@@ -502,17 +506,18 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
                          __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
                          __global const rtcd_uint* first_rays, rtcd_uint job_count,
                          __global rtcd_outcome* outcomes) {
-  rtcd_uint i = get_global_id(0);
-  rtcd_candidate c;
-  if (i >= first_rays[job_count]) return;
-  c = rays[i];
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces,
-                                     ring_first, ring, nodes, wide, primitives);
+  const rtcd_uint n = first_rays[job_count];
+  rtcd_uint i;
+  RTCD_FOR_EACH(i, n) {
+    const rtcd_candidate c = rays[i];
+    outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals,
+                                       fold_faces, ring_first, ring, nodes, wide, primitives);
+  }
 }
 
 #ifdef RTCD_HAS_DOUBLE
-/* Grid layout (Figure 2.6): one work-item per item, a candidate or not,
- * placed and traced in place; the host keeps the flagged ones. */
+/* Grid layout (Figure 2.6): each item, a candidate or not, placed and
+ * traced in place; the host keeps the flagged ones. */
 __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global const rtcd_device_shape* shapes,
                                __global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                                __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
@@ -525,19 +530,17 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
                                __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,
                                __global const rtcd_tracked* tracked, __global rtcd_uchar* flags,
                                __global rtcd_outcome* outcomes) {
-  rtcd_uint i = get_global_id(0);
-  rtcd_candidate c;
-  int flag;
-  if (i >= rtcd_items_in(items, room)) return;
-  if (item_jobs[i] == RTCD_NO_JOB) {
-    flags[i] = 0;
-    return;
+  const rtcd_uint n = rtcd_items_in(items, room);
+  rtcd_uint i;
+  RTCD_FOR_EACH(i, n) {
+    rtcd_candidate c;
+    const int flag = item_jobs[i] != RTCD_NO_JOB &&
+                     rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices, tracked, &c);
+    flags[i] = (rtcd_uchar)flag;
+    if (flag)
+      outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals,
+                                         fold_faces, ring_first, ring, nodes, wide, primitives);
   }
-  flag = rtcd_select_item(i, jobs, item_jobs, frames, shapes, origins, directions, vertices, tracked, &c);
-  flags[i] = (rtcd_uchar)flag;
-  if (!flag) return;
-  outcomes[i] = rtcd_trace_candidate(&c, jobs, shapes, positions, triangles, neighbors, zero_area, normals, fold_faces,
-                                     ring_first, ring, nodes, wide, primitives);
 }
 #endif
 

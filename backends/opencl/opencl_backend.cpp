@@ -2,22 +2,25 @@
 // step after they are added), the bodies' poses once a step; each step's
 // pair-directions are spread over the devices (a pair that walks stays on
 // the device holding its tracked rays; the others go to the least loaded
-// by expected rays), each device with its own queue, and all devices run
+// by items to search), each device with its own queue, and all devices run
 // at once:
-//   1. rtcd_offsets: the jobs' first items, a scan of the pairs' item
-//      counts; rtcd_prepare: each job made from its pair's 32-byte setup
-//      (both directions: the pair's motion from the poses of the last step
-//      and this one, limits from it, parameters; the bodies' shapes are on
-//      the device) and its frame from its bodies' poses, by the host's own
-//      functions (kernel/motion.h, kernel/limits.h, kernel/job.h,
-//      kernel/frame.h), then rtcd_select: every
-//      possible ray (source item: a vertex or an edge, or tracked ray)
-//      placed in the target's frame in double and flagged when it is a
-//      candidate (the host makes the frames and places the rays when a
-//      device lacks fp64); a full job's possible rays are the items of the
-//      source-tree leaves near its overlap box, which the host finds and
-//      sends as a list or one bit per node, whichever is shorter, and
-//      rtcd_prepare lists in item order;
+//   1. rtcd_pair_list: the batch's pair setups from what was sent (a full
+//      pair's bodies and flags, 12 bytes; a walking pair's reference to its
+//      row of last step's pair table, or its 32-byte setup) and a walking
+//      batch's first items; rtcd_prepare: each job made from its pair's
+//      setup (both directions: the pair's motion from the poses of the last
+//      step and this one, limits from it, parameters; the bodies' shapes
+//      are on the device) and its frame from its bodies' poses, by the
+//      host's own functions (kernel/motion.h, kernel/limits.h,
+//      kernel/job.h, kernel/frame.h); a full job's items are the source-tree
+//      leaves near its candidate box, which it searches there
+//      (kernel/near.h, the CPU executors' search), counts into room for the
+//      batch's items (an atomic count; room the host guessed, and a batch
+//      that outgrows it runs again) and lists in item order. Then
+//      rtcd_select: every possible ray (source item: a vertex or an edge,
+//      or tracked ray) placed in the target's frame in double and flagged
+//      when it is a candidate (the host makes the frames, searches and
+//      places the rays when a device lacks fp64);
 //   2. rtcd_count and rtcd_offsets: per job, a prefix sum over the flags,
 //      then one over the jobs, so the candidates form a compacted list in
 //      the CPU's order, laid out on the device;
@@ -27,11 +30,11 @@
 //      counted there (kernel/tally.h); the rays it goes on tracking stay on
 //      the device for the next step's walks, one job after another, and
 //      those that report (contacts, predictive rays) are laid out by job,
-//      each naming its job. After one wait the host reads the counters, 8
-//      bytes a job (its kept rays and kept vertex rays) and the reports
-//      whole (up to a bound guessed from each pair's reports the step
-//      before; past it, a second read and wait), and
-//      builds each job's kept outcomes in its slot: the reports in their
+//      each naming its job. After one wait the host reads the counters (and
+//      a full batch's item count), 8 bytes a job (its kept rays and kept
+//      vertex rays) and the reports whole (up to a bound guessed from each
+//      pair's reports the step before; past it, a second read and wait),
+//      and builds each job's kept outcomes in its slot: the reports in their
 //      places, placeholders (kind and edge) for the rest, so the step is in
 //      job order (poses and setups go up; no other outcome comes down).
 //   5. The kept rays' walk starts are read back on a second queue that
@@ -131,7 +134,11 @@ struct Lane {
   std::vector<rtcd_full_pair> host_full;
   uint32_t searched_jobs = 0;
   uint64_t item_bound = 0;
-  double most_items_per_job = 0;  // over its past batches
+  double most_items_per_job = 0, last_items_per_job = 0;  // over its past batches, and its last
+  // Its kernels over items and rays take them in strides of this many
+  // work-items (RTCD_FOR_EACH): its items where the host knows them, else
+  // as many as its last batch's a searched job.
+  uint32_t launch_items = 0;
   std::vector<rtcd_uint> host_found;  // one
   uint32_t found = 0;
   double pair_motion = 0;  // the last pair's, while its setup is checked (add_direction)
@@ -139,8 +146,7 @@ struct Lane {
   uint32_t setups_sent = 0;            // after the references
   uint32_t slot_base = RTCD_NO_SLOT;  // its pairs' rows in the step's pair table
   std::vector<rtcd_frame> host_frames;      // the host places the rays: it makes the frames
-  std::vector<rtcd_uint> host_near;  // full jobs' near leaves (rtcd_near_leaf)
-  std::vector<rtcd_uint> leaves;     // a job's near leaves, while it is added
+  std::vector<rtcd_uint> host_near;  // full jobs' near leaves, where the host places the rays (rtcd_near_leaf)
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
   // What comes back: the batch's counters, a summary a job and the reports
@@ -582,7 +588,11 @@ class OpenClExecutor final : public RayExecutor {
       refer(d.lanes[which], jobs[j], jobs[j + 1]);
     }
     for (Device& d : devices_)
-      if (Lane& lane = d.lanes[which]; lane.device_counts) lane.items = item_room(lane, lane.searched_jobs);
+      if (Lane& lane = d.lanes[which]; lane.device_counts) {
+        lane.items = item_room(lane, lane.searched_jobs);
+        const double guess = lane.last_items_per_job * lane.searched_jobs;
+        lane.launch_items = guess > 0 ? std::min<uint32_t>(lane.items, uint32_t(guess) + 1) : lane.items;
+      }
   }
 
   // Room for a full batch's items before the device counts them: as many a
@@ -719,25 +729,21 @@ class OpenClExecutor final : public RayExecutor {
     }
   }
 
-  // A full job's leaves near its overlap box (visit_near_leaves) appended
-  // to the batch's in the shortest form (rtcd_near_write); returns how many
-  // items they hold.
+  // A full job's leaves near its overlap box (visit_near_leaves), where
+  // the host places the rays: appended to the batch's as bits
+  // (rtcd_near_leaf); returns how many items they hold.
   size_t mark_near_leaves(Lane& lane, const RayJob& job, rtcd_device_job& dj) const {
     const RaySources& rs = shapes_[job.source]->sources();
     const rtcd_uint* leaf_of_node = data_.leaf_of_node.data() + data_.table[job.source].first_source_node;
-    lane.leaves.clear();
+    dj.first_near = rtcd_uint(lane.host_near.size());
+    lane.host_near.resize(lane.host_near.size() + rtcd_near_words(data_.leaf_counts[job.source]), 0);
+    rtcd_uint* bits = lane.host_near.data() + dj.first_near;
     size_t items = 0;
     const DistanceBound& bound = shapes_[job.target]->distance_bound();
     visit_near_leaves(make_frame(job), rs, bound, edge_reach(dj.params), [&](uint32_t n) {
-      lane.leaves.push_back(leaf_of_node[n]);
+      bits[leaf_of_node[n] / 32] |= rtcd_uint(1) << (leaf_of_node[n] % 32);
       items += rs.items_of(n).size();
     });
-    dj.first_near = rtcd_uint(lane.host_near.size());
-    if (lane.leaves.empty()) return 0;
-    std::sort(lane.leaves.begin(), lane.leaves.end());
-    const auto n = rtcd_uint(lane.leaves.size()), leaf_count = data_.leaf_counts[job.source];
-    lane.host_near.resize(lane.host_near.size() + rtcd_near_words(n, leaf_count), 0);
-    rtcd_near_write(lane.leaves.data(), n, leaf_count, lane.host_near.data() + dj.first_near);
     return items;
   }
 
@@ -813,8 +819,8 @@ class OpenClExecutor final : public RayExecutor {
     return cl_uint(1 + kTracedShapeBuffers);
   }
 
-  // rtcd_trace over at most `rays` rays.
-  void enqueue_trace(Device& d, Lane& lane, uint32_t rays) {
+  // rtcd_trace over at most `rays` rays, in strides of `launch_size`.
+  void enqueue_trace(Device& d, Lane& lane, uint32_t rays, uint32_t launch_size) {
     reserve(lane.outcomes, rays * sizeof(rtcd_outcome));
     cl::Kernel& k = d.trace;
     const cl_uint next = bind_jobs_and_shapes(d, lane, k);
@@ -822,7 +828,7 @@ class OpenClExecutor final : public RayExecutor {
     k.setArg(next + 1, lane.first_rays.buffer);
     k.setArg(next + 2, rtcd_uint(lane.host_jobs.size()));
     k.setArg(next + 3, lane.outcomes.buffer);
-    launch(d, k, rays);
+    launch(d, k, launch_size);
   }
 
   // After the trace, on the device: each job's outcomes counted
@@ -906,7 +912,7 @@ class OpenClExecutor final : public RayExecutor {
     set_args(k, next, lane.item_jobs.buffer, lane.frames.buffer, lane.items_found.buffer, rtcd_uint(lane.items),
              d.shapes[kOrigins], d.shapes[kDirections], lane.vertices.buffer, d.kept[(step_ + 1) % 2].buffer,
              lane.flags.buffer, lane.outcomes.buffer);
-    launch(d, k, lane.items);
+    launch(d, k, lane.launch_items);
     settle(d, lane, lane.first_items, lane.items);
   }
 
@@ -943,7 +949,7 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
     reserve(lane.item_jobs, lane.items * sizeof(rtcd_uint));
     // Room for each full job's near leaves as bits (rtcd_near_find).
-    const rtcd_uint near_stride = lane.device_counts ? 1 + (data_.most_leaves + 31) / 32 : 0;
+    const rtcd_uint near_stride = lane.device_counts ? rtcd_near_words(data_.most_leaves) : 0;
     reserve(lane.near, size_t(jobs_count) * near_stride * sizeof(rtcd_uint));
     cl::Kernel& p = d.prepare;
     const rtcd_limit_settings& l = limit_settings_;
@@ -960,7 +966,7 @@ class OpenClExecutor final : public RayExecutor {
     set_args(d.select, 0, lane.jobs.buffer, lane.item_jobs.buffer, lane.frames.buffer, lane.items_found.buffer,
              rtcd_uint(lane.items), d.shapes[kTable], d.shapes[kOrigins], d.shapes[kDirections], lane.vertices.buffer,
              tracked.buffer, lane.flags.buffer, lane.staging.buffer);
-    launch(d, d.select, lane.items);
+    launch(d, d.select, lane.launch_items);
     reserve(lane.slots, lane.items * sizeof(rtcd_uint));
     reserve(lane.counts, jobs_count * sizeof(rtcd_uint));
     cl::Kernel& c = d.count;
@@ -1019,8 +1025,8 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.rays, lane.items * sizeof(rtcd_candidate));
     set_args(d.scatter, 0, lane.item_jobs.buffer, lane.first_rays.buffer, lane.items_found.buffer,
              rtcd_uint(lane.items), lane.flags.buffer, lane.slots.buffer, lane.staging.buffer, lane.rays.buffer);
-    launch(d, d.scatter, lane.items);
-    enqueue_trace(d, lane, lane.items);
+    launch(d, d.scatter, lane.launch_items);
+    enqueue_trace(d, lane, lane.items, lane.launch_items);
     settle(d, lane, lane.first_rays, lane.items);
   }
 
@@ -1070,9 +1076,10 @@ class OpenClExecutor final : public RayExecutor {
     const uint32_t found = lane.host_found[0];
     if (found > lane.item_bound) throw Error("a device found more items than its jobs' sources hold");
     if (lane.searched_jobs > 0)
-      lane.most_items_per_job = std::max(lane.most_items_per_job, double(found) / lane.searched_jobs);
+      lane.last_items_per_job = double(found) / lane.searched_jobs;
+    lane.most_items_per_job = std::max(lane.most_items_per_job, lane.last_items_per_job);
     if (found > lane.items) {
-      lane.items = found;
+      lane.items = lane.launch_items = found;
       enqueue(d, lane, false);
       wait(d, lane.outcomes_read);
       if (lane.host_found[0] != found) throw Error("a device found other items when it ran a batch again");
@@ -1088,6 +1095,7 @@ class OpenClExecutor final : public RayExecutor {
     lane.host_counts.assign(lane.host_jobs.size(), 0);
     lane.ray_count = 0;
     lane.found = lane.items;  // where the device counts, known after the wait
+    if (!lane.device_counts) lane.launch_items = lane.items;
     if (lane.items == 0) return;
     upload_shapes(d);
     if (!runtime_->place_on_device) {
@@ -1107,7 +1115,7 @@ class OpenClExecutor final : public RayExecutor {
       write(d, lane.first_rays, lane.host_first_rays);
       write(d, lane.counts, lane.host_counts);
       write(d, lane.rays, lane.host_rays);
-      enqueue_trace(d, lane, lane.ray_count);
+      enqueue_trace(d, lane, lane.ray_count, lane.ray_count);
       settle(d, lane, lane.first_rays, lane.ray_count);
     }
     d.queue.flush();

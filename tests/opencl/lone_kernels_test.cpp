@@ -9,8 +9,6 @@
 // a share's bounds or its prefix would slip. The replays reach a few of
 // these counts only by chance.
 //
-// A full job's near leaves, in each of their forms, read alike.
-//
 // The jobs: rtcd_prepare makes each job's parameters from its setup and its
 // frame from its bodies' poses by the functions the host runs (the CPU
 // executor's make_trace_params, the pipeline's place); the two must be the
@@ -169,7 +167,9 @@ TEST(OpenClScans, PairListsMakeTheSetupsAndTheHostsPrefixSumAroundGroupMultiples
       }
       EXPECT_EQ(first_items[2 * pairs], sum);
       EXPECT_EQ(items[0], sum) << "the batch's item count";
-      if (!walking) EXPECT_EQ(sum, 0u);
+      if (!walking) {
+        EXPECT_EQ(sum, 0u);
+      }
     }
   }
 }
@@ -419,41 +419,6 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
   }
   EXPECT_GT(boxes, 4 * kJobs / 10) << "the neighbours' candidate boxes must be boxes, or the test says little";
   EXPECT_GT(moving, kJobs / 2) << "most pairs must move, or the motions' test says little";
-}
-
-// A full job's near leaves in the shortest of their forms (rtcd_near_write:
-// one bit a leaf, a sorted list two leaves a word, or one a word past 65536
-// leaves): random sets of a tree's leaves, one to all, around word
-// boundaries and the 16-bit limit; each answers every leaf as the set.
-TEST(OpenClNearLeaves, EveryFormHoldsTheSameLeaves) {
-  std::mt19937 g(14);
-  size_t forms[3] = {0, 0, 0};  // bits, short list, wide list
-  for (const rtcd_uint leaf_count : {1u, 31u, 32u, 33u, 64u, 65u, 1087u, 65536u, 65537u, 70001u}) {
-    for (const double share : {0.001, 0.01, 0.1, 0.5, 1.0}) {
-      SCOPED_TRACE(std::to_string(leaf_count) + " leaves, share " + std::to_string(share));
-      std::bernoulli_distribution near(share);
-      std::vector<rtcd_uint> leaves;
-      std::vector<bool> expected(leaf_count);
-      for (rtcd_uint n = 0; n < leaf_count; ++n)
-        if (near(g)) {
-          expected[n] = true;
-          leaves.push_back(n);
-        }
-      if (leaves.empty()) continue;
-      const auto n = rtcd_uint(leaves.size());
-      std::vector<rtcd_uint> written(rtcd_near_words(n, leaf_count), 0);
-      rtcd_near_write(leaves.data(), n, leaf_count, written.data());
-      // The shortest: bits, or a list of two leaves a word where they fit 16 bits.
-      const size_t bits = 1 + (leaf_count + 31) / 32, list = 1 + (leaf_count <= 65536 ? (n + 1) / 2 : n);
-      EXPECT_EQ(written.size(), std::min(bits, list));
-      ++forms[written[0] == RTCD_NEAR_BITS ? 0 : written[0] & RTCD_NEAR_WIDE ? 2 : 1];
-      for (rtcd_uint l = 0; l < leaf_count; ++l) ASSERT_EQ(rtcd_near_leaf(written.data(), l), int(expected[l])) << l;
-      if (written[0] == RTCD_NEAR_BITS) continue;
-      ASSERT_EQ(rtcd_near_count(written.data()), n);
-      for (rtcd_uint k = 0; k < n; ++k) ASSERT_EQ(rtcd_near_entry(written.data(), k), leaves[k]) << k;
-    }
-  }
-  for (const size_t f : forms) EXPECT_GT(f, 0u) << "every form is written";
 }
 
 }  // namespace
