@@ -1,6 +1,7 @@
 // A full job's candidates (visit_near_items): the distance bound turns away
 // leaves of edges far from the target's surface, and never one holding an
 // edge within the reach, measured exactly (segment to triangle, in double).
+#include <cmath>
 #include <random>
 
 #include <Eigen/Geometry>
@@ -9,6 +10,7 @@
 #include "rtcd/cpu_executor.hpp"
 #include "rtcd/distance_bound.hpp"
 #include "rtcd/mesh_gen.hpp"
+#include "rtcd/near_search.hpp"
 
 namespace rtcd {
 namespace {
@@ -75,6 +77,39 @@ TEST(NearLeaves, EdgesFarFromTheSurfaceAreTurnedAwayAndNoneWithinReach) {
   }
   EXPECT_GT(within, 100u) << "poses in contact";
   EXPECT_LT(visited, meeting * 3 / 4) << "the bound turns away a good share of the edges in the overlap box";
+}
+
+// The search asks whether a target's distance bound at a point passes a
+// threshold (rtcd_distance_exceeds), which stops at the first node that
+// shows it and takes no square root for a node that cannot: the same
+// answer as rtcd_distance_lower(...) > threshold, at the bound's value
+// itself and one float step either side of it, within the mesh's grid and
+// beyond it, and for each volume.
+TEST(NearLeaves, TheSearchsThresholdTestAnswersAsTheBound) {
+  const Shape shapes[] = {Shape(gen::concave_blob(900, 23, 0.5)), Shape(Sphere{0.4}),
+                          Shape(Box{Eigen::Vector3d(0.3, 0.5, 0.2)}), Shape(HalfSpace{})};
+  std::mt19937_64 rng(6);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0), spread(-0.3, 0.3);
+  size_t passed = 0, not_passed = 0;
+  for (const Shape& shape : shapes) {
+    const DistanceBound& bound = shape.distance_bound();
+    const rtcd_distance_grid grid = DistanceBoundKernel::grid(bound);
+    const float* values = DistanceBoundKernel::values(bound).data();
+    for (int trial = 0; trial < 4000; ++trial) {
+      const double reach = trial % 4 == 0 ? 3.0 : 1.2;  // beyond the grid, or mostly within it
+      const double p[3] = {reach * unit(rng), reach * unit(rng), reach * unit(rng)};
+      const double lower = rtcd_distance_lower(&grid, values, p);
+      for (const double threshold : {lower, std::nextafter(lower, -INFINITY), std::nextafter(lower, INFINITY),
+                                     lower + spread(rng)}) {
+        const bool exceeds = rtcd_distance_exceeds(&grid, values, p, threshold) != 0;
+        ASSERT_EQ(exceeds, lower > threshold) << "trial " << trial << ", threshold " << threshold - lower
+                                              << " from the bound " << lower;
+        (exceeds ? passed : not_passed) += 1;
+      }
+    }
+  }
+  EXPECT_GT(passed, 4000u);
+  EXPECT_GT(not_passed, 4000u);
 }
 
 }  // namespace

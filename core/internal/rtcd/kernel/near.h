@@ -48,44 +48,93 @@ typedef struct {
 
 RTCD_INLINE double rtcd_norm3(double x, double y, double z) { return sqrt(x * x + y * y + z * z); }
 
+/* A mesh's grid cell holding p (its node of least coordinates, in c), or 0
+ * when p lies beyond the grid (or is NaN). */
+RTCD_INLINE int rtcd_grid_cell(const rtcd_distance_grid* g, const double p[3], int c[3]) {
+  int a;
+  for (a = 0; a < 3; ++a) {
+    const double at = (p[a] - g->origin[a]) / g->cell;
+    if (!(at >= 0.0 && at <= (double)(g->nodes[a] - 1))) return 0;
+    c[a] = (int)at < g->nodes[a] - 2 ? (int)at : g->nodes[a] - 2;
+  }
+  return 1;
+}
+
+/* Corner k (0..7) of cell c: its value, and its distance to p. */
+RTCD_INLINE double rtcd_grid_value(const rtcd_distance_grid* g, RTCD_GLOBAL const float* values, const int c[3],
+                                   int k) {
+  const int x = c[0] + (k & 1), y = c[1] + ((k >> 1) & 1), z = c[2] + ((k >> 2) & 1);
+  return (double)values[((rtcd_ulong)z * (rtcd_ulong)g->nodes[1] + (rtcd_ulong)y) * (rtcd_ulong)g->nodes[0] +
+                        (rtcd_ulong)x];
+}
+RTCD_INLINE double rtcd_grid_reach(const rtcd_distance_grid* g, const int c[3], int k, const double p[3]) {
+  const int x = c[0] + (k & 1), y = c[1] + ((k >> 1) & 1), z = c[2] + ((k >> 2) & 1);
+  return rtcd_norm3(p[0] - (g->origin[0] + g->cell * (double)x), p[1] - (g->origin[1] + g->cell * (double)y),
+                    p[2] - (g->origin[2] + g->cell * (double)z));
+}
+
+/* p's distance to the box [lo, hi] (0 inside). */
+RTCD_INLINE double rtcd_box_distance(const rtcd_distance_grid* g, const double p[3]) {
+  double q[3], m;
+  int a;
+  for (a = 0; a < 3; ++a) {
+    m = g->lo[a] - p[a] < p[a] - g->hi[a] ? p[a] - g->hi[a] : g->lo[a] - p[a];
+    q[a] = m < 0.0 ? 0.0 : m;
+  }
+  return rtcd_norm3(q[0], q[1], q[2]);
+}
+
+/* A volume's distance from p to its surface, in closed form. */
+RTCD_INLINE double rtcd_volume_distance(const rtcd_distance_grid* g, const double p[3]) {
+  double q[3], m;
+  int a;
+  if (g->kind == RTCD_BOUND_SPHERE) return rtcd_abs_d(rtcd_norm3(p[0], p[1], p[2]) - g->radius);
+  if (g->kind == RTCD_BOUND_HALF_SPACE) return rtcd_abs_d(p[2]);
+  for (a = 0; a < 3; ++a) q[a] = rtcd_abs_d(p[a]) - g->hi[a];
+  if (q[0] > 0.0 || q[1] > 0.0 || q[2] > 0.0)
+    return rtcd_norm3(q[0] < 0.0 ? 0.0 : q[0], q[1] < 0.0 ? 0.0 : q[1], q[2] < 0.0 ? 0.0 : q[2]);
+  m = q[0] < q[1] ? q[1] : q[0];
+  return -(m < q[2] ? q[2] : m);
+}
+
 /* A lower bound on the distance from p (the shape's frame) to its surface
  * (DistanceBound::lower): closed forms for volumes; for a mesh, the max
  * over p's cell's 8 nodes of the node's value less its distance to p, and
  * never less than p's distance to the mesh's box. */
 RTCD_INLINE double rtcd_distance_lower(const rtcd_distance_grid* g, RTCD_GLOBAL const float* values,
                                        const double p[3]) {
-  double q[3], outside, best, m;
-  int c[3], a, k;
-  if (g->kind == RTCD_BOUND_SPHERE) return rtcd_abs_d(rtcd_norm3(p[0], p[1], p[2]) - g->radius);
-  if (g->kind == RTCD_BOUND_HALF_SPACE) return rtcd_abs_d(p[2]);
-  if (g->kind == RTCD_BOUND_BOX) {
-    for (a = 0; a < 3; ++a) q[a] = rtcd_abs_d(p[a]) - g->hi[a];
-    if (q[0] > 0.0 || q[1] > 0.0 || q[2] > 0.0)
-      return rtcd_norm3(q[0] < 0.0 ? 0.0 : q[0], q[1] < 0.0 ? 0.0 : q[1], q[2] < 0.0 ? 0.0 : q[2]);
-    m = q[0] < q[1] ? q[1] : q[0];
-    return -(m < q[2] ? q[2] : m);
-  }
-  for (a = 0; a < 3; ++a) {
-    m = g->lo[a] - p[a] < p[a] - g->hi[a] ? p[a] - g->hi[a] : g->lo[a] - p[a];
-    q[a] = m < 0.0 ? 0.0 : m;
-  }
-  outside = rtcd_norm3(q[0], q[1], q[2]);
-  for (a = 0; a < 3; ++a) {
-    const double at = (p[a] - g->origin[a]) / g->cell;
-    if (!(at >= 0.0 && at <= (double)(g->nodes[a] - 1))) return outside; /* beyond the grid (or NaN) */
-    c[a] = (int)at < g->nodes[a] - 2 ? (int)at : g->nodes[a] - 2;
-  }
-  best = outside;
+  double best, d;
+  int c[3], k;
+  if (g->kind != RTCD_BOUND_GRID) return rtcd_volume_distance(g, p);
+  best = rtcd_box_distance(g, p);
+  if (!rtcd_grid_cell(g, p, c)) return best;
   for (k = 0; k < 8; ++k) {
-    const int x = c[0] + (k & 1), y = c[1] + ((k >> 1) & 1), z = c[2] + ((k >> 2) & 1);
-    const double value = (double)values[((rtcd_ulong)z * (rtcd_ulong)g->nodes[1] + (rtcd_ulong)y) *
-                                            (rtcd_ulong)g->nodes[0] + (rtcd_ulong)x];
-    const double d = value - rtcd_norm3(p[0] - (g->origin[0] + g->cell * (double)x),
-                                        p[1] - (g->origin[1] + g->cell * (double)y),
-                                        p[2] - (g->origin[2] + g->cell * (double)z));
+    d = rtcd_grid_value(g, values, c, k) - rtcd_grid_reach(g, c, k, p);
     best = best < d ? d : best;
   }
   return best - 1e-9 * g->cell; /* the lookup's own rounding */
+}
+
+/* Whether rtcd_distance_lower(g, values, p) > threshold, the same answer
+ * for less: subtracting the rounding allowance keeps order, so the bound
+ * passes the threshold when any node's term less the allowance does; a
+ * node whose value less the allowance does not cannot (its distance to p
+ * only lowers it), and needs no square root. */
+RTCD_INLINE int rtcd_distance_exceeds(const rtcd_distance_grid* g, RTCD_GLOBAL const float* values,
+                                      const double p[3], double threshold) {
+  const double allowance = 1e-9 * g->cell;
+  double outside, value;
+  int c[3], k;
+  if (g->kind != RTCD_BOUND_GRID) return rtcd_volume_distance(g, p) > threshold;
+  outside = rtcd_box_distance(g, p);
+  if (!rtcd_grid_cell(g, p, c)) return outside > threshold;
+  if (outside - allowance > threshold) return 1;
+  for (k = 0; k < 8; ++k) {
+    value = rtcd_grid_value(g, values, c, k);
+    if (!(value - allowance > threshold)) continue;
+    if ((value - rtcd_grid_reach(g, c, k, p)) - allowance > threshold) return 1;
+  }
+  return 0;
 }
 
 #define RTCD_NEAR_STACK 64 /* depth <= log2(origins) + 1 for median splits */
@@ -164,10 +213,10 @@ RTCD_INLINE int rtcd_near_may_hold(const rtcd_near_search* s, const rtcd_source_
                         tree->order[n->end - 1] >= tree->first_edge))
     return 1;
   return s->reach >= 0.0 &&
-         !(rtcd_distance_lower(target, values, centre) >
-           0.5 * rtcd_norm3((double)(n->hi[0] - n->lo[0]), (double)(n->hi[1] - n->lo[1]),
-                            (double)(n->hi[2] - n->lo[2])) +
-               s->beyond);
+         !rtcd_distance_exceeds(target, values, centre,
+                                0.5 * rtcd_norm3((double)(n->hi[0] - n->lo[0]), (double)(n->hi[1] - n->lo[1]),
+                                                 (double)(n->hi[2] - n->lo[2])) +
+                                    s->beyond);
 }
 
 /* The search's next leaf, or RTCD_NO_LEAF: each leaf at most once. */
