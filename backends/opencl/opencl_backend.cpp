@@ -609,11 +609,11 @@ class OpenClExecutor final : public RayExecutor {
     return uint32_t(room);
   }
 
-  // A job's items: its tracked rays, or the items (origins and edges) of its near leaves.
-  // Their count is also the rays it is expected to cast, by which jobs are
-  // spread over the devices.
-  // Where the device counts a full job's items, its count here is 0 and its
-  // sources' item count (a bound) goes to the lane's room and load.
+  // A job's items: its tracked rays, or the items (origins and edges) of
+  // its near leaves. Their count is also the rays it is expected to cast,
+  // by which jobs are spread over the devices. Where the device counts a
+  // full job's items, its count here is 0 and its source's item count (a
+  // bound) goes to the lane's room and load.
   void add(Lane& lane, uint32_t j, const RayJob& job, const Config& config) {
     rtcd_device_job dj{};
     dj.params = make_trace_params(job, *shapes_[job.source], *shapes_[job.target], config);
@@ -981,15 +981,14 @@ class OpenClExecutor final : public RayExecutor {
     launch_group(d, d.offsets);
   }
 
-  // The batch's pairs up (their setups, or a walking batch's references
-  // and the setups they name) and their setups made on the device, with its
-  // item list (rtcd_pair_list); rows for them in the step's pair table.
+  // The batch's pairs up (a full batch's bodies and flags, or a walking
+  // batch's references and the setups they name) and their setups made on
+  // the device, with a walking batch's item list (rtcd_pair_list); rows for
+  // them in the step's pair table.
   void send_pairs(Device& d, Lane& lane) {
     const auto jobs_count = rtcd_uint(lane.host_jobs.size());
     if (lane.device_counts) {
       write(d, lane.list, lane.host_full);
-    } else if (lane.host_refs.empty()) {
-      write(d, lane.list, lane.host_setups);
     } else {
       const auto words = [](const auto& v) { return std::as_bytes(std::span(v)).size() / sizeof(rtcd_uint); };
       lane.host_list.resize(words(lane.host_refs) + size_t(lane.setups_sent) * RTCD_PAIR_SETUP_WORDS);
