@@ -1251,19 +1251,20 @@ class OpenClExecutor final : public RayExecutor {
       const rtcd_job_summary& s = lane.host_summaries[l];
       const int target_kind = data_.table[dj.target].kind;
       const auto edge_kind = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, dj.params.first_edge));
-      out.resize(s.kept);
-      for (uint32_t k = 0; k < s.kept; ++k) {
-        RayOutcome& o = out[k];
-        if (runtime_->place_on_device) {
-          rtcd_outcome_init(&o, kPlaceholder);
-        } else {
+      RayOutcome watched{};  // the placeholder: its vertex rays', then its edges'
+      rtcd_outcome_init(&watched, kPlaceholder);
+      watched.kind = RTCD_RAY_WATCHED;
+      watched.edge = rtcd_uchar(RTCD_ITEM_ORIGIN);
+      out.assign(s.kept_origins, watched);
+      watched.edge = edge_kind;
+      out.resize(s.kept, watched);
+      if (!runtime_->place_on_device) {  // whole: the host placed the rays
+        for (uint32_t k = 0; k < s.kept; ++k) {
           const rtcd_tracked& r = lane.host_kept[first + k];
-          rtcd_outcome_init(&o, r.vertex);
-          o.triangle = r.triangle;
-          o.entry = r.entry;
+          out[k].vertex = r.vertex;
+          out[k].triangle = r.triangle;
+          out[k].entry = r.entry;
         }
-        o.kind = RTCD_RAY_WATCHED;
-        o.edge = k < s.kept_origins ? rtcd_uchar(RTCD_ITEM_ORIGIN) : edge_kind;
       }
       for (; report != reports_end && report->job == l; ++report) {
         if (report->place >= s.kept)

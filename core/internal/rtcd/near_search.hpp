@@ -1,6 +1,6 @@
 // The kernel's search for a full job's near leaves and its distance bound
 // (kernel/near.h) over the host's shapes: one search for the CPU
-// executors and the OpenCL host.
+// executors and the OpenCL host (its devices run the kernel's own).
 #pragma once
 
 #include <cstddef>

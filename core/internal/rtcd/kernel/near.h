@@ -1,8 +1,7 @@
 /* Which leaves of a source's tree a full job lists, and the distance bound
- * that search reads: one search that the CPU executors and the OpenCL host
- * run, so all take the same items, and one bound that
- * DistanceBound::lower is; in the kernel's C, so a device could run them
- * to the same bits (docs/decisions.md: not yet, while the host counts).
+ * that search reads: one search that the CPU executors, the OpenCL devices
+ * (rtcd_prepare) and the OpenCL host where it places the rays run, so all
+ * take the same items, and one bound that DistanceBound::lower is.
  * Contraction is off; sqrt is correctly rounded on both sides. */
 #ifndef RTCD_KERNEL_NEAR_H
 #define RTCD_KERNEL_NEAR_H
