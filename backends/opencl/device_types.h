@@ -20,9 +20,9 @@ typedef struct {
   rtcd_uint node_count;
   rtcd_uint first_wide;      /* the BVH's wide nodes */
   rtcd_uint first_primitive; /* the BVH's triangle list */
-  rtcd_uint first_source;    /* ray origins and directions, the items' leaves, the leaves' items */
+  rtcd_uint first_source;    /* ray origins and directions, the items in tree order */
   rtcd_uint source_count;
-  rtcd_uint first_source_node; /* its source tree's nodes (rtcd_source_node) and their leaf numbers */
+  rtcd_uint first_source_node; /* its source tree's nodes (rtcd_source_node) */
   rtcd_uint source_node_count;
   rtcd_uint first_value; /* its distance bound's grid values */
   float radius;             /* sphere */
@@ -40,7 +40,7 @@ typedef struct {
   rtcd_uint first_item;
   rtcd_uint item_count;
   rtcd_uint first_tracked; /* iterative jobs: the job's tracked rays */
-  rtcd_uint first_near;    /* full jobs placed on the host: where its near leaves are (rtcd_near_leaf) */
+  rtcd_uint first_near;    /* full jobs placed on the host: where its near items are (rtcd_near_item) */
 } rtcd_device_job;
 
 #ifdef RTCD_HAS_DOUBLE
@@ -60,15 +60,14 @@ RTCD_INLINE rtcd_device_job rtcd_device_job_of(rtcd_uint config, const rtcd_job_
 }
 #endif
 
-/* A full job's near leaves as bits, one a leaf (leaves numbered in their
- * source tree's node order): where a device has more than it merges
- * (rtcd_near_find), and where the host places the rays. Words a shape of
- * `leaf_count` leaves needs: */
-RTCD_INLINE rtcd_uint rtcd_near_words(rtcd_uint leaf_count) { return (leaf_count + 31) / 32; }
+/* A full job's items near its candidate box as bits, one an item of its
+ * source (rtcd_near_find on a device; the host's where it places the
+ * rays). Words a source of `item_count` items needs: */
+RTCD_INLINE rtcd_uint rtcd_near_words(rtcd_uint item_count) { return (item_count + 31) / 32; }
 
-/* Whether a job's near leaves hold `leaf`. */
-RTCD_INLINE int rtcd_near_leaf(RTCD_GLOBAL const rtcd_uint* bits, rtcd_uint leaf) {
-  return (int)((bits[leaf / 32] >> (leaf % 32)) & 1u);
+/* Whether a job's near items hold `item`. */
+RTCD_INLINE int rtcd_near_item(RTCD_GLOBAL const rtcd_uint* bits, rtcd_uint item) {
+  return (int)((bits[item / 32] >> (item % 32)) & 1u);
 }
 
 /* A pair of a full batch as the host sends it: its bodies and flags (no

@@ -71,21 +71,96 @@ RTCD_INLINE float rtcd_tracer_distance2(const rtcd_tracer* t, rtcd_int triangle,
 
 #include "rtcd/kernel/trace.h"
 
-/* A full job's near leaves (source-tree nodes) are merged this many at
- * most (rtcd_merge_leaves); past it they are written as bits and every
- * source item is tested. */
-#define RTCD_NEAR_MERGE 32u
+/* The batch's items the device counted (`items`, rtcd_prepare), up to the
+ * room the host made. Within the room, a job that did not fit leaves items
+ * of no job (RTCD_NO_JOB). The kernels over items or rays take them in
+ * strides of the launch (RTCD_FOR_EACH), whose size the host guesses. */
+#define RTCD_NO_JOB 0xffffffffu
+RTCD_INLINE rtcd_uint rtcd_items_in(__global const rtcd_uint* items, rtcd_uint room) { return min(*items, room); }
+#define RTCD_FOR_EACH(i, n) for (i = get_global_id(0); i < (n); i += get_global_size(0))
 
-/* The items of `leaf_count` (at most RTCD_NEAR_MERGE) leaves, in
- * increasing order: a merge of the leaves' item lists (each in order, its
- * node's range of `items`), the least head next. */
-RTCD_INLINE void rtcd_merge_leaves(const rtcd_uint* leaves, rtcd_uint leaf_count, __global const rtcd_uint* items,
-                                   __global const rtcd_source_node* nodes, __global rtcd_uint* out) {
+#ifdef RTCD_HAS_DOUBLE
+/* What a device reads to find a full job's items: the shapes' source
+ * trees (rtcd_source_node, by first_source_node) and the items in tree
+ * order (RaySources::order, by first_source), the distance bounds (by
+ * shape) and their grids' values (by first_value). */
+typedef struct {
+  __global const rtcd_device_shape* shapes;
+  __global const rtcd_source_node* nodes;
+  __global const rtcd_uint* order;
+  __global const rtcd_distance_grid* grids;
+  __global const float* values;
+} rtcd_near_data;
+
+/* A full job's near leaves are merged this many at most (rtcd_near_list);
+ * past it their items are written as bits. */
+#define RTCD_NEAR_MERGE 8u
+
+/* A full job's near leaves (kernel/near.h's search of its source tree, as
+ * the CPU executors run it): those near its candidate box, in `list`, or,
+ * past RTCD_NEAR_MERGE, their items as bits at `bits`, one an item of the
+ * source (rtcd_near_words of them). Returns how many items they hold;
+ * *listed is how many leaves were found, up to RTCD_NEAR_MERGE + 1. */
+RTCD_INLINE rtcd_uint rtcd_near_find(const rtcd_near_data* data, const rtcd_device_job* job,
+                                     const rtcd_shape_traits* source_traits, const rtcd_frame* frame,
+                                     rtcd_uint* list, rtcd_uint* listed, __global rtcd_uint* bits) {
+  const rtcd_device_shape shape = data->shapes[job->source];
+  const rtcd_distance_grid grid = data->grids[job->target];
+  __global const float* values = data->values + data->shapes[job->target].first_value;
+  rtcd_uint leaf, count = 0, k, r;
+  rtcd_source_tree tree;
+  rtcd_near_search search;
+  tree.nodes = data->nodes + shape.first_source_node;
+  tree.order = data->order + shape.first_source;
+  tree.node_count = shape.source_node_count;
+  tree.first_edge = source_traits->first_edge;
+  tree.sphere = source_traits->sphere_radius > 0.0f;
+  rtcd_near_begin(&search, frame, rtcd_edge_reach(&job->params), &tree);
+  *listed = 0;
+  while ((leaf = rtcd_near_next(&search, &tree, &grid, values)) != RTCD_NO_LEAF) {
+    count += tree.nodes[leaf].end - tree.nodes[leaf].begin;
+    if (*listed < RTCD_NEAR_MERGE) {
+      list[(*listed)++] = leaf;
+      continue;
+    }
+    if (*listed == RTCD_NEAR_MERGE) { /* the list is full: bits from here on */
+      for (k = 0; k < rtcd_near_words(shape.source_count); ++k) bits[k] = 0;
+      for (r = 0; r < RTCD_NEAR_MERGE; ++r)
+        for (k = tree.nodes[list[r]].begin; k < tree.nodes[list[r]].end; ++k)
+          bits[tree.order[k] / 32] |= 1u << (tree.order[k] % 32);
+      ++*listed;
+    }
+    for (k = tree.nodes[leaf].begin; k < tree.nodes[leaf].end; ++k)
+      bits[tree.order[k] / 32] |= 1u << (tree.order[k] % 32);
+  }
+  return count;
+}
+
+/* The items rtcd_near_find found, in item order, at `out`: a merge of its
+ * leaves' items (each leaf's in order, `items` the source's, sorted a
+ * leaf), the least head next; or the bits set, word by word. */
+RTCD_INLINE void rtcd_near_list(const rtcd_near_data* data, rtcd_uint source, const rtcd_uint* list,
+                                rtcd_uint listed, __global const rtcd_uint* items, __global const rtcd_uint* bits,
+                                __global rtcd_uint* out) {
+  const rtcd_device_shape shape = data->shapes[source];
+  __global const rtcd_source_node* nodes = data->nodes + shape.first_source_node;
   rtcd_uint at[RTCD_NEAR_MERGE], end[RTCD_NEAR_MERGE], head[RTCD_NEAR_MERGE];
-  rtcd_uint runs = 0, r, n = 0;
-  for (r = 0; r < leaf_count; ++r) {
-    at[runs] = nodes[leaves[r]].begin;
-    end[runs] = nodes[leaves[r]].end;
+  rtcd_uint runs = 0, r, n = 0, w;
+  items += shape.first_source;
+  if (listed > RTCD_NEAR_MERGE) {
+    for (w = 0; w < rtcd_near_words(shape.source_count); ++w) {
+      rtcd_uint word = bits[w];
+      while (word != 0) {
+        const rtcd_uint lowest = word & (~word + 1u);
+        out[n++] = 32 * w + 31 - clz(lowest);
+        word ^= lowest;
+      }
+    }
+    return;
+  }
+  for (r = 0; r < listed; ++r) {
+    at[runs] = nodes[list[r]].begin;
+    end[runs] = nodes[list[r]].end;
     if (at[runs] == end[runs]) continue;
     head[runs] = items[at[runs]];
     ++runs;
@@ -105,82 +180,6 @@ RTCD_INLINE void rtcd_merge_leaves(const rtcd_uint* leaves, rtcd_uint leaf_count
   }
 }
 
-/* The batch's items the device counted (`items`, rtcd_prepare), up to the
- * room the host made. Within the room, a job that did not fit leaves items
- * of no job (RTCD_NO_JOB). The kernels over items or rays take them in
- * strides of the launch (RTCD_FOR_EACH), whose size the host guesses. */
-#define RTCD_NO_JOB 0xffffffffu
-RTCD_INLINE rtcd_uint rtcd_items_in(__global const rtcd_uint* items, rtcd_uint room) { return min(*items, room); }
-#define RTCD_FOR_EACH(i, n) for (i = get_global_id(0); i < (n); i += get_global_size(0))
-
-#ifdef RTCD_HAS_DOUBLE
-/* What a device reads to find a full job's items: the shapes' source
- * trees (rtcd_source_node, by first_source_node), the items of their
- * leaves (by first_source) and each item's and node's leaf number, the
- * distance bounds (by shape) and their grids' values (by first_value). */
-typedef struct {
-  __global const rtcd_device_shape* shapes;
-  __global const rtcd_source_node* nodes;
-  __global const rtcd_uint* leaf_items;
-  __global const rtcd_uint* source_leaves;
-  __global const rtcd_uint* leaf_of_node;
-  __global const rtcd_distance_grid* grids;
-  __global const float* values;
-} rtcd_near_data;
-
-/* A full job's near leaves (kernel/near.h's search of its source tree, as
- * the CPU executors run it): the leaves near its candidate box, their
- * nodes in `list`, or, past RTCD_NEAR_MERGE, as bits at `bits` (room for
- * every leaf of the shape: rtcd_near_words). Returns how many items they
- * hold; *listed is how many leaves were found, up to RTCD_NEAR_MERGE + 1. */
-RTCD_INLINE rtcd_uint rtcd_near_find(const rtcd_near_data* data, const rtcd_device_job* job,
-                                     const rtcd_shape_traits* source_traits, const rtcd_frame* frame,
-                                     rtcd_uint* list, rtcd_uint* listed, __global rtcd_uint* bits) {
-  const rtcd_device_shape shape = data->shapes[job->source];
-  const rtcd_distance_grid grid = data->grids[job->target];
-  __global const float* values = data->values + data->shapes[job->target].first_value;
-  __global const rtcd_uint* leaf_of_node = data->leaf_of_node + shape.first_source_node;
-  rtcd_uint leaf, count = 0, w;
-  rtcd_source_tree tree;
-  rtcd_near_search search;
-  tree.nodes = data->nodes + shape.first_source_node;
-  tree.order = data->leaf_items + shape.first_source; /* each leaf's in order: the same kinds at its ends */
-  tree.node_count = shape.source_node_count;
-  tree.first_edge = source_traits->first_edge;
-  tree.sphere = source_traits->sphere_radius > 0.0f;
-  rtcd_near_begin(&search, frame, rtcd_edge_reach(&job->params), &tree);
-  *listed = 0;
-  while ((leaf = rtcd_near_next(&search, &tree, &grid, values)) != RTCD_NO_LEAF) {
-    count += tree.nodes[leaf].end - tree.nodes[leaf].begin;
-    if (*listed < RTCD_NEAR_MERGE) {
-      list[(*listed)++] = leaf;
-      continue;
-    }
-    if (*listed == RTCD_NEAR_MERGE) { /* the list is full: bits from here on */
-      /* a binary tree of n nodes has (n + 1) / 2 leaves */
-      for (w = 0; w < rtcd_near_words((shape.source_node_count + 1) / 2); ++w) bits[w] = 0;
-      for (w = 0; w < RTCD_NEAR_MERGE; ++w) bits[leaf_of_node[list[w]] / 32] |= 1u << (leaf_of_node[list[w]] % 32);
-      ++*listed;
-    }
-    bits[leaf_of_node[leaf] / 32] |= 1u << (leaf_of_node[leaf] % 32);
-  }
-  return count;
-}
-
-/* The items of the leaves rtcd_near_find found, in item order, at `out`:
- * a merge of a list, or every item of the source tested against bits. */
-RTCD_INLINE void rtcd_near_list(const rtcd_near_data* data, rtcd_uint source, const rtcd_uint* list,
-                                rtcd_uint listed, __global const rtcd_uint* bits, __global rtcd_uint* out) {
-  const rtcd_device_shape shape = data->shapes[source];
-  rtcd_uint v, n = 0;
-  if (listed <= RTCD_NEAR_MERGE) {
-    rtcd_merge_leaves(list, listed, data->leaf_items + shape.first_source, data->nodes + shape.first_source_node, out);
-    return;
-  }
-  for (v = 0; v < shape.source_count; ++v)
-    if (rtcd_near_leaf(bits, data->source_leaves[shape.first_source + v])) out[n++] = v;
-}
-
 /* One job, before its items, made from its pair's setup (job j is
  * direction j % 2 of pair j / 2) as the host makes it: its limits from the
  * pair's motion (from its bodies' poses of the last step, `before`, to
@@ -189,18 +188,18 @@ RTCD_INLINE void rtcd_near_list(const rtcd_near_data* data, rtcd_uint source, co
  * (rtcd_make_params) and its frame from its bodies' poses
  * (rtcd_relative_frame). A walking job's items are its tracked rays, from
  * its first item (rtcd_pair_list); a full job finds its own
- * (rtcd_near_items) and takes room for them in the batch's item list
- * from `items` on (an atomic count, so jobs lie in any order, each its
- * items in order), while they fit in `room`; past it the count still grows,
- * and the host runs the batch again with room for it. Each item's job goes
- * to `item_jobs`. */
+ * (rtcd_near_find; bits at `near`, near_stride words a job) and takes
+ * room for them in the batch's item list from `items` on (an atomic count,
+ * so jobs lie in any order, each its items in order), while they fit in
+ * `room`; past it the count still grows, and the host runs the batch again
+ * with room for it. Each item's job goes to `item_jobs`. */
 __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job_count, rtcd_uint config,
                            double displacement_threshold, double distance_extension, rtcd_uint max_walk_steps,
                            rtcd_uint limits_set, __global const rtcd_device_shape* shapes,
                            __global const rtcd_shape_traits* traits, __global const rtcd_box* bounds,
                            __global const rtcd_shape_scale* scales, __global const rtcd_source_node* source_nodes,
-                           __global const rtcd_uint* leaf_items, __global const rtcd_uint* source_leaves,
-                           __global const rtcd_uint* leaf_of_node, __global const rtcd_distance_grid* grids,
+                           __global const rtcd_uint* source_order, __global const rtcd_uint* leaf_items,
+                           __global const rtcd_distance_grid* grids,
                            __global const float* grid_values, __global rtcd_uint* near, rtcd_uint near_stride,
                            __global const rtcd_pose* poses, __global const rtcd_pose* before,
                            __global const rtcd_uint* body_shapes, __global rtcd_device_job* jobs,
@@ -247,9 +246,7 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
   if (!job.params.iterative) {
     data.shapes = shapes;
     data.nodes = source_nodes;
-    data.leaf_items = leaf_items;
-    data.source_leaves = source_leaves;
-    data.leaf_of_node = leaf_of_node;
+    data.order = source_order;
     data.grids = grids;
     data.values = grid_values;
     near += (size_t)j * near_stride;
@@ -260,7 +257,7 @@ __kernel void rtcd_prepare(__global const rtcd_pair_setup* setups, rtcd_uint job
       job.item_count = 0;
       job.first_item = 0;
     } else if (job.item_count > 0) {
-      rtcd_near_list(&data, job.source, list, listed, near, vertices + job.first_item);
+      rtcd_near_list(&data, job.source, list, listed, leaf_items, near, vertices + job.first_item);
     }
   }
   jobs[j] = job;

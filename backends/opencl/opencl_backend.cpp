@@ -104,8 +104,8 @@ struct GrowingBuffer {
 // first kTracedShapeBuffers, after the jobs.
 enum ShapeBuffer : size_t {
   kTable, kPositions, kTriangles, kNeighbors, kZeroArea, kNormals, kFoldFaces, kRingFirst, kRing, kNodes, kWide,
-  kPrimitives, kOrigins, kDirections, kSourceNodes, kLeafItems, kSourceLeaves, kLeafOfNode, kGrids, kGridValues,
-  kBounds, kTraits, kScales
+  kPrimitives, kOrigins, kDirections, kSourceNodes, kSourceOrder, kLeafItems, kGrids, kGridValues, kBounds, kTraits,
+  kScales
 };
 constexpr size_t kTracedShapeBuffers = kOrigins;
 
@@ -146,7 +146,7 @@ struct Lane {
   uint32_t setups_sent = 0;            // after the references
   uint32_t slot_base = RTCD_NO_SLOT;  // its pairs' rows in the step's pair table
   std::vector<rtcd_frame> host_frames;      // the host places the rays: it makes the frames
-  std::vector<rtcd_uint> host_near;  // full jobs' near leaves, where the host places the rays (rtcd_near_leaf)
+  std::vector<rtcd_uint> host_near;  // full jobs' near items, where the host places the rays (rtcd_near_item)
   std::vector<rtcd_tracked> host_tracked;
   std::vector<rtcd_candidate> host_rays;
   // What comes back: the batch's counters, a summary a job and the reports
@@ -437,9 +437,9 @@ class OpenClExecutor final : public RayExecutor {
                 upload_once(data_.fold_faces), upload_once(data_.ring_first), upload_once(data_.ring),
                 upload_once(data_.nodes),      upload_once(data_.wide),       upload_once(data_.primitives),
                 upload_once(data_.origins),    upload_once(data_.directions), upload_once(data_.source_nodes),
-                upload_once(data_.leaf_items), upload_once(data_.source_leaves), upload_once(data_.leaf_of_node),
-                upload_once(data_.grids),      upload_once(data_.grid_values), upload_once(data_.bounds),
-                upload_once(data_.traits),     upload_once(data_.scales)};
+                upload_once(data_.source_order), upload_once(data_.leaf_items), upload_once(data_.grids),
+                upload_once(data_.grid_values),
+                upload_once(data_.bounds),     upload_once(data_.traits),     upload_once(data_.scales)};
     d.shapes_uploaded = data_.table.size();
   }
 
@@ -620,7 +620,7 @@ class OpenClExecutor final : public RayExecutor {
     const bool searched = lane.device_counts && !job.overlap.empty();
     const size_t items = job.overlap.empty() || lane.device_counts ? 0
                          : job.iterative                            ? job.tracked.size()
-                                                                    : mark_near_leaves(lane, job, dj);
+                                                                    : mark_near_items(lane, job, dj);
     if (searched) {
       const size_t bound = data_.table[job.source].source_count;
       ++lane.searched_jobs;
@@ -729,21 +729,20 @@ class OpenClExecutor final : public RayExecutor {
     }
   }
 
-  // A full job's leaves near its overlap box (visit_near_leaves), where
-  // the host places the rays: appended to the batch's as bits
-  // (rtcd_near_leaf); returns how many items they hold.
-  size_t mark_near_leaves(Lane& lane, const RayJob& job, rtcd_device_job& dj) const {
+  // A full job's items near its overlap box (visit_near_items), where the
+  // host places the rays: appended to the batch's as bits (rtcd_near_item);
+  // returns how many.
+  size_t mark_near_items(Lane& lane, const RayJob& job, rtcd_device_job& dj) const {
     const RaySources& rs = shapes_[job.source]->sources();
-    const rtcd_uint* leaf_of_node = data_.leaf_of_node.data() + data_.table[job.source].first_source_node;
     dj.first_near = rtcd_uint(lane.host_near.size());
-    lane.host_near.resize(lane.host_near.size() + rtcd_near_words(data_.leaf_counts[job.source]), 0);
+    lane.host_near.resize(lane.host_near.size() + rtcd_near_words(rs.item_count()), 0);
     rtcd_uint* bits = lane.host_near.data() + dj.first_near;
     size_t items = 0;
-    const DistanceBound& bound = shapes_[job.target]->distance_bound();
-    visit_near_leaves(make_frame(job), rs, bound, edge_reach(dj.params), [&](uint32_t n) {
-      bits[leaf_of_node[n] / 32] |= rtcd_uint(1) << (leaf_of_node[n] % 32);
-      items += rs.items_of(n).size();
-    });
+    visit_near_items(make_frame(job), rs, shapes_[job.target]->distance_bound(), edge_reach(dj.params),
+                     [&](uint32_t v) {
+                       bits[v / 32] |= rtcd_uint(1) << (v % 32);
+                       ++items;
+                     });
     return items;
   }
 
@@ -753,12 +752,11 @@ class OpenClExecutor final : public RayExecutor {
     for (uint32_t l = 0; l < lane.host_jobs.size(); ++l) {
       const rtcd_device_job& job = lane.host_jobs[l];
       const RaySources& rs = shapes_[job.source]->sources();
-      const rtcd_uint* leaves = data_.source_leaves.data() + data_.table[job.source].first_source;
-      // Tracked rays, or every item of the near leaves (rtcd_prepare).
+      // Tracked rays, or the near items (mark_near_items).
       const uint32_t count = job.params.iterative || job.item_count == 0 ? job.item_count : rs.item_count();
       for (uint32_t k = 0; k < count; ++k) {
         rtcd_candidate c{k, -1, -1, l, {}, {}};
-        if (!job.params.iterative && !rtcd_near_leaf(lane.host_near.data() + job.first_near, leaves[k])) continue;
+        if (!job.params.iterative && !rtcd_near_item(lane.host_near.data() + job.first_near, k)) continue;
         if (job.params.iterative) {
           const rtcd_tracked& r = lane.host_tracked[job.first_tracked + k];
           c.vertex = r.vertex;
@@ -948,15 +946,15 @@ class OpenClExecutor final : public RayExecutor {
     reserve(lane.flags, lane.items);
     reserve(lane.vertices, lane.items * sizeof(rtcd_uint));
     reserve(lane.item_jobs, lane.items * sizeof(rtcd_uint));
-    // Room for each full job's near leaves as bits (rtcd_near_find).
-    const rtcd_uint near_stride = lane.device_counts ? rtcd_near_words(data_.most_leaves) : 0;
+    // Room for each full job's near items as bits (rtcd_near_find).
+    const rtcd_uint near_stride = lane.device_counts ? rtcd_near_words(data_.most_items) : 0;
     reserve(lane.near, size_t(jobs_count) * near_stride * sizeof(rtcd_uint));
     cl::Kernel& p = d.prepare;
     const rtcd_limit_settings& l = limit_settings_;
     set_args(p, 0, lane.setups.buffer, jobs_count, config_flags(config_), l.displacement_threshold,
              l.distance_extension, l.max_walk_steps, l.set, d.shapes[kTable], d.shapes[kTraits], d.shapes[kBounds],
-             d.shapes[kScales], d.shapes[kSourceNodes], d.shapes[kLeafItems], d.shapes[kSourceLeaves],
-             d.shapes[kLeafOfNode], d.shapes[kGrids], d.shapes[kGridValues], lane.near.buffer, near_stride,
+             d.shapes[kScales], d.shapes[kSourceNodes], d.shapes[kSourceOrder], d.shapes[kLeafItems],
+             d.shapes[kGrids], d.shapes[kGridValues], lane.near.buffer, near_stride,
              d.poses.buffer, d.before.buffer, d.body_shapes.buffer, lane.jobs.buffer, lane.first_items.buffer,
              lane.frames.buffer, lane.items_found.buffer, rtcd_uint(lane.items), lane.vertices.buffer,
              lane.item_jobs.buffer);
@@ -1251,20 +1249,19 @@ class OpenClExecutor final : public RayExecutor {
       const rtcd_job_summary& s = lane.host_summaries[l];
       const int target_kind = data_.table[dj.target].kind;
       const auto edge_kind = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, dj.params.first_edge));
-      RayOutcome watched{};  // the placeholder: its vertex rays', then its edges'
-      rtcd_outcome_init(&watched, kPlaceholder);
-      watched.kind = RTCD_RAY_WATCHED;
-      watched.edge = rtcd_uchar(RTCD_ITEM_ORIGIN);
-      out.assign(s.kept_origins, watched);
-      watched.edge = edge_kind;
-      out.resize(s.kept, watched);
-      if (!runtime_->place_on_device) {  // whole: the host placed the rays
-        for (uint32_t k = 0; k < s.kept; ++k) {
+      out.resize(s.kept);
+      for (uint32_t k = 0; k < s.kept; ++k) {
+        RayOutcome& o = out[k];
+        if (runtime_->place_on_device) {
+          rtcd_outcome_init(&o, kPlaceholder);
+        } else {
           const rtcd_tracked& r = lane.host_kept[first + k];
-          out[k].vertex = r.vertex;
-          out[k].triangle = r.triangle;
-          out[k].entry = r.entry;
+          rtcd_outcome_init(&o, r.vertex);
+          o.triangle = r.triangle;
+          o.entry = r.entry;
         }
+        o.kind = RTCD_RAY_WATCHED;
+        o.edge = k < s.kept_origins ? rtcd_uchar(RTCD_ITEM_ORIGIN) : edge_kind;
       }
       for (; report != reports_end && report->job == l; ++report) {
         if (report->place >= s.kept)

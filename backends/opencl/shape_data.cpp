@@ -25,24 +25,17 @@ void ShapeData::add(const Shape& shape, const ShapeScale& scale, bool bvh) {
     origins.push_back(rtcd_v3(o.x(), o.y(), o.z()));
     directions.push_back(rtcd_v3(dir.x(), dir.y(), dir.z()));
   }
-  source_leaves.resize(origins.size(), 0);
   if (rs.order.size() != rs.item_count()) throw Error("a shape's ray sources are not indexed (RaySources::index)");
   d.first_source_node = rtcd_uint(source_nodes.size());
   d.source_node_count = rtcd_uint(rs.nodes.size());
   const rtcd_source_tree tree = kernel_tree(rs);
   source_nodes.insert(source_nodes.end(), tree.nodes, tree.nodes + tree.node_count);
+  source_order.insert(source_order.end(), rs.order.begin(), rs.order.end());
   leaf_items.insert(leaf_items.end(), rs.order.begin(), rs.order.end());
-  rtcd_uint leaves = 0;
-  for (uint32_t n = 0; n < rs.nodes.size(); ++n) {
-    const RaySources::Node& node = rs.nodes[n];
-    leaf_of_node.push_back(node.child == 0 ? leaves : ~rtcd_uint(0));  // inner nodes have none
-    if (node.child != 0) continue;
-    for (uint32_t v : rs.items_of(n)) source_leaves[d.first_source + v] = leaves;
-    std::sort(leaf_items.begin() + d.first_source + node.begin, leaf_items.begin() + d.first_source + node.end);
-    ++leaves;
-  }
-  leaf_counts.push_back(leaves);
-  most_leaves = std::max(most_leaves, leaves);
+  for (const RaySources::Node& node : rs.nodes)
+    if (node.child == 0)
+      std::sort(leaf_items.begin() + d.first_source + node.begin, leaf_items.begin() + d.first_source + node.end);
+  most_items = std::max(most_items, d.source_count);
   if (const Mesh* mesh = shape.mesh()) {
     d.kind = RTCD_TARGET_MESH;
     d.triangle_count = rtcd_uint(mesh->triangle_count());

@@ -17,16 +17,14 @@ struct ShapeData {
   std::vector<rtcd_shape_traits> traits;  // per shape: what its jobs' parameters read
   std::vector<rtcd_shape_scale> scales;   // per shape: what its pairs' limits read
   std::vector<rtcd_vec3> positions, normals, origins, directions;
-  // The source trees (kernel/near.h) and their leaves, numbered a shape in
-  // node order: per item its leaf; the items, each leaf's in increasing
-  // order, as one list a shape (by first_source), which the nodes' ranges
-  // index; per node its leaf number (by first_source_node; the search
-  // finds nodes). A device searches a full job's near leaves and lists
-  // their items instead of testing every item.
+  // The source trees (kernel/near.h): their nodes (by first_source_node)
+  // and items in tree order (RaySources::order, by first_source), which a
+  // device searches for a full job's near leaves instead of testing every
+  // item, and the same with each leaf's items in increasing order, which it
+  // merges.
   std::vector<rtcd_source_node> source_nodes;
-  std::vector<rtcd_uint> source_leaves, leaf_items, leaf_of_node;
-  std::vector<rtcd_uint> leaf_counts;  // per shape
-  rtcd_uint most_leaves = 0;           // of any shape
+  std::vector<rtcd_uint> source_order, leaf_items;
+  rtcd_uint most_items = 0;  // of any shape's source
   // Per shape, its distance bound, which the searches read; the grids'
   // values one after another (by first_value).
   std::vector<rtcd_distance_grid> grids;

@@ -366,14 +366,14 @@ TEST(OpenClFrames, PrepareMakesTheHostsJobsAndFramesBitForBit) {
     k.setArg(4, settings.distance_extension);
     k.setArg(5, settings.max_walk_steps);
     k.setArg(6, settings.set);
-    // Walks: the full jobs' source trees, distance bounds, near leaves and item list unread.
+    // Walks: the full jobs' source trees, distance bounds, near items and item list unread.
     const rtcd_uint item_total = first_items.back() + pairs.back().item_count[1];
     std::vector<rtcd_uint> item_jobs(item_total, 0xdeadbeef), items{item_total};
     const cl::Buffer item_jobs_buffer = buffer_of(*rt, item_jobs);
     const cl::Buffer args[] = {buffer_of(*rt, table),  buffer_of(*rt, traits), buffer_of(*rt, bounds),
                                buffer_of(*rt, scales), buffer_of(*rt, unused), buffer_of(*rt, unused),
                                buffer_of(*rt, unused), buffer_of(*rt, unused), buffer_of(*rt, unused),
-                               buffer_of(*rt, unused), buffer_of(*rt, unused)};
+                               buffer_of(*rt, unused)};
     cl_uint next = 7;
     for (const cl::Buffer& b : args) k.setArg(next++, b);
     k.setArg(next++, rtcd_uint(0));  // near leaves' stride
