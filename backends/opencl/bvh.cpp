@@ -38,7 +38,7 @@ struct Item {
 
 class Builder {
  public:
-  explicit Builder(FlatBvh& out) : out_(out) {}
+  Builder(const Mesh& mesh, FlatBvh& out) : mesh_(mesh), out_(out) {}
 
   void build(std::vector<Item>& items, size_t begin, size_t end) {
     const size_t index = out_.nodes.size();
@@ -56,7 +56,7 @@ class Builder {
     if (mid == begin) {
       node.first = rtcd_uint(out_.primitives.size());
       node.count = rtcd_uint(count);
-      for (size_t i = begin; i < end; ++i) out_.primitives.push_back(items[i].triangle);
+      for (size_t i = begin; i < end; ++i) out_.primitives.push_back(primitive(items[i].triangle));
       node.escape = rtcd_uint(out_.nodes.size());
       return;
     }
@@ -125,6 +125,17 @@ class Builder {
     return mid;
   }
 
+  rtcd_bvh_primitive primitive(uint32_t triangle) const {
+    rtcd_bvh_primitive p{};
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3f& v = mesh_.positions()[mesh_.triangles()[triangle][size_t(k)]];
+      p.corner[k] = rtcd_v3(v.x(), v.y(), v.z());
+    }
+    p.triangle = rtcd_int(triangle);
+    return p;
+  }
+
+  const Mesh& mesh_;
   FlatBvh& out_;
 };
 
@@ -177,11 +188,12 @@ rtcd_int widen(FlatBvh& bvh, std::vector<rtcd_uint> slots) {
 FlatBvh build_flat_bvh(const Mesh& mesh) {
   FlatBvh bvh;
   const auto positions = mesh.positions();
-  std::vector<Item> items(mesh.triangle_count());
-  for (size_t t = 0; t < items.size(); ++t) {
-    const auto& tri = mesh.triangles()[t];
-    Item& item = items[t];
-    for (uint32_t v : tri) item.box.extend(positions[v]);
+  std::vector<Item> items;
+  items.reserve(mesh.triangle_count());
+  for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+    if (mesh.zero_area()[t]) continue;  // no query answers it
+    Item& item = items.emplace_back();
+    for (uint32_t v : mesh.triangles()[t]) item.box.extend(positions[v]);
     // Centroid from the box: cheap, and the split needs only an order.
     item.centroid = 0.5f * (item.box.lo + item.box.hi);
     item.triangle = uint32_t(t);
@@ -192,7 +204,7 @@ FlatBvh build_flat_bvh(const Mesh& mesh) {
   // Leaf codes hold first * 4 + count in an int.
   if (items.size() >= (size_t(1) << 29))
     throw Error("a mesh of " + std::to_string(items.size()) + " triangles: the BVH holds fewer than 2^29");
-  Builder(bvh).build(items, 0, items.size());
+  Builder(mesh, bvh).build(items, 0, items.size());
   widen(bvh, {0});
   return bvh;
 }

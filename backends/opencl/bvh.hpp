@@ -12,7 +12,7 @@ namespace rtcd {
 
 struct FlatBvh {
   std::vector<rtcd_bvh_node> nodes;  // depth first: a node, its first subtree, its second
-  std::vector<rtcd_uint> primitives;  // triangle ids, each leaf a range
+  std::vector<rtcd_bvh_primitive> primitives;  // each leaf a range; no zero-area triangle
   std::vector<rtcd_bvh_wide_node> wide;  // depth first from the root; empty when `nodes` is
 };
 

@@ -24,15 +24,14 @@ typedef struct {
   __global const rtcd_int* ring;
   __global const rtcd_bvh_node* nodes;
   __global const rtcd_bvh_wide_node* wide;
-  __global const rtcd_uint* primitives;
+  __global const rtcd_bvh_primitive* primitives;
   rtcd_uint triangle_count;
   rtcd_uint node_count;
 } rtcd_tracer;
 
 RTCD_INLINE rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray* ray, float t_max) {
 #ifdef RTCD_BVH
-  return rtcd_bvh_first_hit(ray, t->nodes, t->node_count, t->wide, t->primitives, t->positions, t->triangles,
-                            t->zero_area, t_max);
+  return rtcd_bvh_first_hit(ray, t->nodes, t->node_count, t->wide, t->primitives, t_max);
 #else
   return rtcd_brute_first_hit(ray, t->positions, t->triangles, t->zero_area, t->triangle_count, t_max);
 #endif
@@ -42,8 +41,7 @@ RTCD_INLINE rtcd_hit rtcd_tracer_first_hit(const rtcd_tracer* t, const rtcd_ray*
  * stop sooner. */
 RTCD_INLINE rtcd_int rtcd_tracer_nearest(const rtcd_tracer* t, rtcd_vec3 point, float radius, float enough) {
 #ifdef RTCD_BVH
-  return rtcd_bvh_nearest(point, radius, enough, t->nodes, t->node_count, t->wide, t->primitives, t->positions,
-                          t->triangles, t->zero_area);
+  return rtcd_bvh_nearest(point, radius, enough, t->nodes, t->node_count, t->wide, t->primitives);
 #else
   return rtcd_brute_nearest(point, radius, t->positions, t->triangles, t->zero_area, t->triangle_count);
 #endif
@@ -458,7 +456,7 @@ RTCD_INLINE rtcd_outcome rtcd_trace_candidate(const rtcd_candidate* c, __global 
                                               __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                                               __global const rtcd_bvh_node* nodes,
                                               __global const rtcd_bvh_wide_node* wide,
-                                              __global const rtcd_uint* primitives) {
+                                              __global const rtcd_bvh_primitive* primitives) {
   rtcd_trace_params p = jobs[c->job].params;
   rtcd_device_shape shape = shapes[jobs[c->job].target];
   int item = rtcd_item_kind(shape.kind, &p, c->vertex);
@@ -500,7 +498,7 @@ __kernel void rtcd_trace(__global const rtcd_device_job* jobs, __global const rt
                          __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
                          __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                          __global const rtcd_bvh_node* nodes, __global const rtcd_bvh_wide_node* wide,
-                         __global const rtcd_uint* primitives, __global const rtcd_candidate* rays,
+                         __global const rtcd_bvh_primitive* primitives, __global const rtcd_candidate* rays,
                          __global const rtcd_uint* first_rays, rtcd_uint job_count,
                          __global rtcd_outcome* outcomes) {
   const rtcd_uint n = first_rays[job_count];
@@ -521,7 +519,7 @@ __kernel void rtcd_trace_items(__global const rtcd_device_job* jobs, __global co
                                __global const rtcd_vec3* normals, __global const rtcd_fold_face* fold_faces,
                                __global const rtcd_uint* ring_first, __global const rtcd_int* ring,
                                __global const rtcd_bvh_node* nodes, __global const rtcd_bvh_wide_node* wide,
-                               __global const rtcd_uint* primitives,
+                               __global const rtcd_bvh_primitive* primitives,
                                __global const rtcd_uint* item_jobs, __global const rtcd_frame* frames,
                                __global const rtcd_uint* items, rtcd_uint room, __global const rtcd_vec3* origins,
                                __global const rtcd_vec3* directions, __global const rtcd_uint* vertices,

@@ -34,7 +34,8 @@ struct ShapeData {
   std::vector<rtcd_fold_face> fold_faces;
   std::vector<rtcd_uint> ring_first{0};
   std::vector<rtcd_int> ring;
-  std::vector<rtcd_uint> triangles, primitives;
+  std::vector<rtcd_uint> triangles;
+  std::vector<rtcd_bvh_primitive> primitives;
   std::vector<rtcd_int> neighbors;
   std::vector<rtcd_uchar> zero_area;
   std::vector<rtcd_bvh_node> nodes;

@@ -43,7 +43,7 @@ float rtcd_tracer_distance2(const rtcd_tracer* t, rtcd_int triangle, rtcd_vec3 p
 __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_uint* triangles,
                        __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
                        __global const rtcd_bvh_node* nodes, __global const rtcd_bvh_wide_node* wide,
-                       __global const rtcd_uint* primitives,
+                       __global const rtcd_bvh_primitive* primitives,
                        __global float* out) {
   rtcd_ray ray = rtcd_make_ray(rtcd_v3(0.0f, 0.0f, 0.0f), rtcd_v3(0.0f, 0.0f, 1.0f));
   rtcd_walk_result w = rtcd_walk(&ray, positions, triangles, neighbors, zero_area, 0, 16u);
@@ -52,9 +52,8 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   float d2 = rtcd_point_triangle_distance2(ray.origin, positions[0], positions[1], positions[2]);
   int kind = rtcd_classify(w.status, w.t, 1, 0.1f) + rtcd_line_kind(w.status, w.t, 1, 1, 0, 0.1f) +
              rtcd_walked_kind(w.status, w.t, s.status, s.t, 1, 1, 0, 0.1f);
-  rtcd_hit h = rtcd_bvh_first_hit(&ray, nodes, 1u, wide, primitives, positions, triangles, zero_area, 1.0f);
-  rtcd_int near =
-      rtcd_bvh_nearest(ray.origin, 1.0f, 0.5f, nodes, 1u, wide, primitives, positions, triangles, zero_area);
+  rtcd_hit h = rtcd_bvh_first_hit(&ray, nodes, 1u, wide, primitives, 1.0f);
+  rtcd_int near = rtcd_bvh_nearest(ray.origin, 1.0f, 0.5f, nodes, 1u, wide, primitives);
   rtcd_tracer t;
   rtcd_trace_params p;
   rtcd_candidate c;

@@ -62,7 +62,14 @@ inline void expect_bvh_answers_as_the_brute_force(size_t& stack_needed) {
     stack_needed = std::max(stack_needed, bvh_stack_needed(bvh));
     expect_wide_tree_of(bvh);
     std::vector<int> seen(mesh.triangle_count(), 0);
-    for (rtcd_uint t : bvh.primitives) ++seen[t];
+    for (const rtcd_bvh_primitive& p : bvh.primitives) {
+      ++seen[size_t(p.triangle)];
+      for (size_t k = 0; k < 3; ++k) {
+        const Eigen::Vector3f& v = mesh.positions()[mesh.triangles()[size_t(p.triangle)][k]];
+        ASSERT_TRUE(p.corner[k].x == v.x() && p.corner[k].y == v.y() && p.corner[k].z == v.z())
+            << "triangle " << p.triangle << "'s corner " << k << " in its leaf";
+      }
+    }
     EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), long(mesh.triangle_count())) << "each triangle in one leaf";
     EXPECT_EQ(bvh.nodes[0].escape, bvh.nodes.size());
     const auto* positions = reinterpret_cast<const rtcd_vec3*>(mesh.positions().data());
@@ -79,7 +86,7 @@ inline void expect_bvh_answers_as_the_brute_force(size_t& stack_needed) {
       const rtcd_ray ray = rtcd_make_ray(origin, rtcd_v3(d.x(), d.y(), d.z()));
       const float t_max = i % 2 ? 3.0e38f : 0.2f;
       const rtcd_hit a = rtcd_bvh_first_hit(&ray, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.wide.data(),
-                                            bvh.primitives.data(), positions, triangles, zero_area, t_max);
+                                            bvh.primitives.data(), t_max);
       const rtcd_hit b = rtcd_brute_first_hit(&ray, positions, triangles, zero_area, n, t_max);
       ASSERT_EQ(a.triangle, b.triangle) << "ray " << i;
       ASSERT_EQ(a.t, b.t) << "ray " << i;
@@ -87,14 +94,14 @@ inline void expect_bvh_answers_as_the_brute_force(size_t& stack_needed) {
       const float radius = i % 3 ? 0.05f : 1.0f;
       const rtcd_int nearest = rtcd_brute_nearest(origin, radius, positions, triangles, zero_area, n);
       ASSERT_EQ(rtcd_bvh_nearest(origin, radius, 0.0f, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.wide.data(),
-                                 bvh.primitives.data(), positions, triangles, zero_area),
+                                 bvh.primitives.data()),
                 nearest)
           << "point " << i;
       // Stopping within `enough`: any triangle that near, else the nearest.
       const float enough = 0.5f * radius;
       const rtcd_int near_enough =
           rtcd_bvh_nearest(origin, radius, enough, bvh.nodes.data(), rtcd_uint(bvh.nodes.size()), bvh.wide.data(),
-                           bvh.primitives.data(), positions, triangles, zero_area);
+                           bvh.primitives.data());
       const auto distance2 = [&](rtcd_int t) {
         return rtcd_point_triangle_distance2(origin, positions[triangles[3 * t]], positions[triangles[3 * t + 1]],
                                              positions[triangles[3 * t + 2]]);

@@ -20,6 +20,15 @@ typedef struct {
   rtcd_uint count;  /* leaves: number of triangles; 0: an inner node, its first child next */
 } rtcd_bvh_node;
 
+/* A leaf's triangle as the traversal reads it: its id and its corners in
+ * the triangle's order, in place, so a leaf costs one load a triangle, not
+ * three dependent ones. Zero-area triangles, which no query answers, are
+ * left out of the tree. */
+typedef struct {
+  rtcd_vec3 corner[3];
+  rtcd_int triangle;
+} rtcd_bvh_primitive;
+
 /* A wide node: up to RTCD_BVH_WIDTH children, their boxes by axis so that
  * one slab test covers them all. A child is another wide node (>= 0), none
  * (-1), or a leaf, -2 - (first * 4 + count): `first` in the primitive
@@ -225,30 +234,21 @@ RTCD_ALWAYS_INLINE int rtcd_bvh_order(const float* key, int* order) {
 
 /* A leaf's triangles against the best hit so far. */
 RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_uint first, rtcd_uint count,
-                                                RTCD_GLOBAL const rtcd_uint* primitives,
-                                                RTCD_GLOBAL const rtcd_vec3* positions,
-                                                RTCD_GLOBAL const rtcd_uint* triangles,
-                                                RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
+                                                RTCD_GLOBAL const rtcd_bvh_primitive* primitives, rtcd_hit* best) {
   rtcd_uint k;
   for (k = 0; k < count; ++k) {
-    rtcd_uint i = primitives[first + k];
-    float t;
-    if (zero_area[i]) continue;
-    t = rtcd_hit_distance(ray, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
-                          positions[triangles[3 * i + 2]]);
-    if (t >= 0.0f && t <= best->t && rtcd_hit_improves(*best, t, (rtcd_int)i)) {
+    const rtcd_bvh_primitive p = primitives[first + k];
+    const float t = rtcd_hit_distance(ray, p.corner[0], p.corner[1], p.corner[2]);
+    if (t >= 0.0f && t <= best->t && rtcd_hit_improves(*best, t, p.triangle)) {
       best->t = t;
-      best->triangle = (rtcd_int)i;
+      best->triangle = p.triangle;
     }
   }
 }
 
 /* The binary nodes [n, end) of a subtree in depth-first order, no stack. */
 RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBAL const rtcd_bvh_node* nodes,
-                                          rtcd_uint n, rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
-                                          RTCD_GLOBAL const rtcd_vec3* positions,
-                                          RTCD_GLOBAL const rtcd_uint* triangles,
-                                          RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_hit* best) {
+                                          rtcd_uint n, rtcd_uint end, RTCD_GLOBAL const rtcd_bvh_primitive* primitives, rtcd_hit* best) {
   while (n < end) {
     rtcd_bvh_node node = nodes[n];
     if (rtcd_slab_entry(slabs, node.lo, node.hi, best->t) < 0.0f) {
@@ -256,7 +256,7 @@ RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBA
     } else if (node.count == 0) {
       n += 1;
     } else {
-      rtcd_bvh_leaf_first_hit(slabs->ray, node.first, node.count, primitives, positions, triangles, zero_area, best);
+      rtcd_bvh_leaf_first_hit(slabs->ray, node.first, node.count, primitives, best);
       n = node.escape;
     }
   }
@@ -265,9 +265,7 @@ RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBA
 /* As rtcd_brute_first_hit, over the wide tree. */
 RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const rtcd_bvh_node* nodes,
                                         rtcd_uint node_count, RTCD_GLOBAL const rtcd_bvh_wide_node* wide,
-                                        RTCD_GLOBAL const rtcd_uint* primitives, RTCD_GLOBAL const rtcd_vec3* positions,
-                                        RTCD_GLOBAL const rtcd_uint* triangles, RTCD_GLOBAL const rtcd_uchar* zero_area,
-                                        float t_max) {
+                                        RTCD_GLOBAL const rtcd_bvh_primitive* primitives, float t_max) {
   rtcd_slab_ray slabs = rtcd_make_slab_ray(ray);
   rtcd_hit best;
   rtcd_int stack[RTCD_BVH_STACK];
@@ -301,46 +299,38 @@ RTCD_INLINE rtcd_hit rtcd_bvh_first_hit(const rtcd_ray* ray, RTCD_GLOBAL const r
           ++top;
         } else if (c >= 0) {
           rtcd_bvh_range_first_hit(&slabs, nodes, node->subtree[k], nodes[node->subtree[k]].escape, primitives,
-                                   positions, triangles, zero_area, &best);
+                                   &best);
         } else {
-          rtcd_bvh_leaf_first_hit(ray, RTCD_BVH_LEAF_FIRST(c), RTCD_BVH_LEAF_COUNT(c), primitives, positions,
-                                  triangles, zero_area, &best);
+          rtcd_bvh_leaf_first_hit(ray, RTCD_BVH_LEAF_FIRST(c), RTCD_BVH_LEAF_COUNT(c), primitives, &best);
         }
       }
       code = node->child[order[0]];
     }
     if (code <= -2)
-      rtcd_bvh_leaf_first_hit(ray, RTCD_BVH_LEAF_FIRST(code), RTCD_BVH_LEAF_COUNT(code), primitives, positions,
-                              triangles, zero_area, &best);
+      rtcd_bvh_leaf_first_hit(ray, RTCD_BVH_LEAF_FIRST(code), RTCD_BVH_LEAF_COUNT(code), primitives, &best);
   }
   return best;
 }
 
 /* A leaf's triangles against the nearest so far. */
 RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_nearest(rtcd_vec3 point, rtcd_uint first, rtcd_uint count,
-                                              RTCD_GLOBAL const rtcd_uint* primitives,
-                                              RTCD_GLOBAL const rtcd_vec3* positions,
-                                              RTCD_GLOBAL const rtcd_uint* triangles,
-                                              RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
+                                              RTCD_GLOBAL const rtcd_bvh_primitive* primitives, rtcd_int* best,
+                                              float* best_d2) {
   rtcd_uint k;
   for (k = 0; k < count; ++k) {
-    rtcd_uint i = primitives[first + k];
-    float d2;
-    if (zero_area[i]) continue;
-    d2 = rtcd_point_triangle_distance2(point, positions[triangles[3 * i]], positions[triangles[3 * i + 1]],
-                                       positions[triangles[3 * i + 2]]);
-    if (d2 <= *best_d2 && rtcd_nearer(*best_d2, *best, d2, (rtcd_int)i)) {
+    const rtcd_bvh_primitive p = primitives[first + k];
+    const float d2 = rtcd_point_triangle_distance2(point, p.corner[0], p.corner[1], p.corner[2]);
+    if (d2 <= *best_d2 && rtcd_nearer(*best_d2, *best, d2, p.triangle)) {
       *best_d2 = d2;
-      *best = (rtcd_int)i;
+      *best = p.triangle;
     }
   }
 }
 
 /* The binary nodes [n, end) of a subtree in depth-first order, no stack. */
 RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint n,
-                                        rtcd_uint end, RTCD_GLOBAL const rtcd_uint* primitives,
-                                        RTCD_GLOBAL const rtcd_vec3* positions, RTCD_GLOBAL const rtcd_uint* triangles,
-                                        RTCD_GLOBAL const rtcd_uchar* zero_area, rtcd_int* best, float* best_d2) {
+                                        rtcd_uint end, RTCD_GLOBAL const rtcd_bvh_primitive* primitives, rtcd_int* best,
+                                        float* best_d2) {
   while (n < end) {
     rtcd_bvh_node node = nodes[n];
     if (!rtcd_bvh_box_near(rtcd_box_distance2(point, node.lo, node.hi), *best_d2)) {
@@ -348,7 +338,7 @@ RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_
     } else if (node.count == 0) {
       n += 1;
     } else {
-      rtcd_bvh_leaf_nearest(point, node.first, node.count, primitives, positions, triangles, zero_area, best, best_d2);
+      rtcd_bvh_leaf_nearest(point, node.first, node.count, primitives, best, best_d2);
       n = node.escape;
     }
   }
@@ -359,8 +349,7 @@ RTCD_INLINE void rtcd_bvh_range_nearest(rtcd_vec3 point, RTCD_GLOBAL const rtcd_
 RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, float enough,
                                       RTCD_GLOBAL const rtcd_bvh_node* nodes, rtcd_uint node_count,
                                       RTCD_GLOBAL const rtcd_bvh_wide_node* wide,
-                                      RTCD_GLOBAL const rtcd_uint* primitives, RTCD_GLOBAL const rtcd_vec3* positions,
-                                      RTCD_GLOBAL const rtcd_uint* triangles, RTCD_GLOBAL const rtcd_uchar* zero_area) {
+                                      RTCD_GLOBAL const rtcd_bvh_primitive* primitives) {
   rtcd_int best = -1;
   float best_d2 = radius * radius, enough_d2 = enough > 0.0f ? enough * enough : -1.0f;
   rtcd_int stack[RTCD_BVH_STACK];
@@ -391,18 +380,16 @@ RTCD_INLINE rtcd_int rtcd_bvh_nearest(rtcd_vec3 point, float radius, float enoug
           distance2[top] = d2[k];
           ++top;
         } else if (c >= 0) {
-          rtcd_bvh_range_nearest(point, nodes, node->subtree[k], nodes[node->subtree[k]].escape, primitives, positions,
-                                 triangles, zero_area, &best, &best_d2);
+          rtcd_bvh_range_nearest(point, nodes, node->subtree[k], nodes[node->subtree[k]].escape, primitives, &best,
+                                 &best_d2);
         } else {
-          rtcd_bvh_leaf_nearest(point, RTCD_BVH_LEAF_FIRST(c), RTCD_BVH_LEAF_COUNT(c), primitives, positions,
-                                triangles, zero_area, &best, &best_d2);
+          rtcd_bvh_leaf_nearest(point, RTCD_BVH_LEAF_FIRST(c), RTCD_BVH_LEAF_COUNT(c), primitives, &best, &best_d2);
         }
       }
       code = node->child[order[0]];
     }
     if (code <= -2) {
-      rtcd_bvh_leaf_nearest(point, RTCD_BVH_LEAF_FIRST(code), RTCD_BVH_LEAF_COUNT(code), primitives, positions,
-                            triangles, zero_area, &best, &best_d2);
+      rtcd_bvh_leaf_nearest(point, RTCD_BVH_LEAF_FIRST(code), RTCD_BVH_LEAF_COUNT(code), primitives, &best, &best_d2);
       if (best_d2 <= enough_d2) break;
     }
   }

@@ -190,32 +190,41 @@ RTCD_INLINE void rtcd_near_begin(rtcd_near_search* s, const rtcd_frame* f, doubl
     s->stack[s->top++] = 0;
 }
 
+/* Row i of the search's box test: node n's centre (mid, in the source's
+ * frame) placed on axis i of the target's, in *centre; whether the node's
+ * placed box (half extent `extent`) meets the candidate box on that axis.
+ * Scalars, not arrays: the kernel compiler keeps them in registers. */
+RTCD_INLINE int rtcd_near_axis(const rtcd_near_search* s, int i, double mid_x, double mid_y, double mid_z,
+                               double extent_x, double extent_y, double extent_z, double* centre) {
+  const double* r = s->rotation + 3 * i;
+  const double* a = s->spread + 3 * i;
+  const double h = a[0] * extent_x + a[1] * extent_y + a[2] * extent_z;
+  *centre = r[0] * mid_x + r[1] * mid_y + r[2] * mid_z + s->translation[i];
+  return *centre + h >= s->lo[i] && *centre - h <= s->hi[i];
+}
+
 /* Whether node n's items may include a candidate of the search's job. */
 RTCD_INLINE int rtcd_near_may_hold(const rtcd_near_search* s, const rtcd_source_tree* tree,
                                    const rtcd_distance_grid* target, RTCD_GLOBAL const float* values,
                                    const rtcd_source_node* n) {
-  double mid[3], extent[3], centre[3], h; /* (`half` is a type in OpenCL C) */
-  int i;
-  for (i = 0; i < 3; ++i) {
-    mid[i] = 0.5 * ((double)n->lo[i] + (double)n->hi[i]);
-    extent[i] = 0.5 * (double)(n->hi[i] - n->lo[i]);
-  }
-  for (i = 0; i < 3; ++i) {
-    const double* r = s->rotation + 3 * i;
-    const double* a = s->spread + 3 * i;
-    centre[i] = r[0] * mid[0] + r[1] * mid[1] + r[2] * mid[2] + s->translation[i];
-    h = a[0] * extent[0] + a[1] * extent[1] + a[2] * extent[2];
-    if (!(centre[i] + h >= s->lo[i]) || !(centre[i] - h <= s->hi[i])) return 0;
-  }
+  const double mid_x = 0.5 * ((double)n->lo[0] + (double)n->hi[0]);
+  const double mid_y = 0.5 * ((double)n->lo[1] + (double)n->hi[1]);
+  const double mid_z = 0.5 * ((double)n->lo[2] + (double)n->hi[2]);
+  const double extent_x = 0.5 * (double)(n->hi[0] - n->lo[0]);
+  const double extent_y = 0.5 * (double)(n->hi[1] - n->lo[1]);
+  const double extent_z = 0.5 * (double)(n->hi[2] - n->lo[2]);
+  double centre[3];
+  if (!rtcd_near_axis(s, 0, mid_x, mid_y, mid_z, extent_x, extent_y, extent_z, &centre[0]) ||
+      !rtcd_near_axis(s, 1, mid_x, mid_y, mid_z, extent_x, extent_y, extent_z, &centre[1]) ||
+      !rtcd_near_axis(s, 2, mid_x, mid_y, mid_z, extent_x, extent_y, extent_z, &centre[2]))
+    return 0;
   /* edges only: no origin, no sphere item */
   if (tree->sphere || !(n->begin < n->end && tree->order[n->begin] >= tree->first_edge &&
                         tree->order[n->end - 1] >= tree->first_edge))
     return 1;
+  /* half the box's diagonal: exactly 0.5 * |hi - lo|, as halving is exact */
   return s->reach >= 0.0 &&
-         !rtcd_distance_exceeds(target, values, centre,
-                                0.5 * rtcd_norm3((double)(n->hi[0] - n->lo[0]), (double)(n->hi[1] - n->lo[1]),
-                                                 (double)(n->hi[2] - n->lo[2])) +
-                                    s->beyond);
+         !rtcd_distance_exceeds(target, values, centre, rtcd_norm3(extent_x, extent_y, extent_z) + s->beyond);
 }
 
 /* The search's next leaf, or RTCD_NO_LEAF: each leaf at most once. */
