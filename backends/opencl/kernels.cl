@@ -388,10 +388,9 @@ RTCD_INLINE void rtcd_scan_counts(__global const rtcd_uint* counts, rtcd_uint jo
 /* The batch's ray list from rtcd_count's counts (first_word 0, stride 2),
  * which bounds rtcd_trace, so no count goes through the host. One
  * work-group. */
-__kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* firsts,
-                           rtcd_uint first_word, rtcd_uint pair_stride) {
+__kernel void rtcd_offsets(__global const rtcd_uint* counts, rtcd_uint job_count, __global rtcd_uint* firsts) {
   __local rtcd_uint partial[RTCD_SCAN_WIDTH];
-  rtcd_scan_counts(counts, job_count, firsts, first_word, pair_stride, partial);
+  rtcd_scan_counts(counts, job_count, firsts, 0u, 2u, partial);
 }
 
 /* The batch's pairs' setups (rtcd_prepare reads them) from what the host

@@ -174,6 +174,9 @@ struct Lane {
   bool ran = false;          // its counters are this step's
 };
 
+// A device's lanes (Device::lanes): its full batch's and its walking batch's.
+constexpr size_t kFullLane = 0, kWalkedLane = 1;
+
 struct Device {
   cl::CommandQueue queue;
   cl::Kernel pair_list, prepare, select, count, offsets, scatter, trace, trace_items, tallies, total, lay_out;
@@ -205,7 +208,7 @@ struct Device {
     bool kernel;
   };
   std::vector<Timed> timed;
-  Lane lanes[2];  // by batch: full, walked
+  Lane lanes[2];  // by batch: kFullLane, kWalkedLane
   size_t group_size = 1;
   // The recovery reads: the kept rays' walk starts, by step parity as
   // `kept`, read on a queue of their own that the step never waits for.
@@ -547,7 +550,7 @@ class OpenClExecutor final : public RayExecutor {
       lane.host_setups.clear();
       lane.host_refs.clear();
       lane.setups_sent = 0;
-      lane.device_counts = runtime_->place_on_device && which == 0;
+      lane.device_counts = runtime_->place_on_device && which == kFullLane;
       lane.host_full.clear();
       lane.searched_jobs = 0;
       lane.item_bound = 0;
@@ -719,7 +722,7 @@ class OpenClExecutor final : public RayExecutor {
     if (!runtime_->place_on_device || !a.iterative) return;
     const rtcd_pair_setup& p = lane.host_setups.back();
     const auto whole = [&](const RayJob& job) {
-      return resident(job) && &devices_[job.residence->place].lanes[1] == &lane &&
+      return resident(job) && &devices_[job.residence->place].lanes[kWalkedLane] == &lane &&
              job.residence->slot == a.residence->slot && job.tracked.size() == job.residence->count;
     };
     if (whole(a) && whole(b) && a.residence->slot != Residence::kNoRecord) {
@@ -975,7 +978,7 @@ class OpenClExecutor final : public RayExecutor {
     c.setArg(4, lane.counts.buffer);
     launch(d, c, jobs_count);
     reserve(lane.first_rays, (size_t(jobs_count) + 1) * sizeof(rtcd_uint));
-    set_args(d.offsets, 0, lane.counts.buffer, jobs_count, lane.first_rays.buffer, rtcd_uint(0), rtcd_uint(2));
+    set_args(d.offsets, 0, lane.counts.buffer, jobs_count, lane.first_rays.buffer);
     launch_group(d, d.offsets);
   }
 
@@ -1033,7 +1036,7 @@ class OpenClExecutor final : public RayExecutor {
   // the items of new pairs.
   static double expected_reports(const Device& d, const Lane& lane) {
     const double unknown = double(lane.unknown_items) + lane.most_items_per_job * double(lane.unknown_jobs);
-    return lane.known_reports + d.lanes[0].reports_per_item * unknown;
+    return lane.known_reports + d.lanes[kFullLane].reports_per_item * unknown;
   }
 
   // After the wait: each job's first kept ray from the summaries, and the
@@ -1128,7 +1131,7 @@ class OpenClExecutor final : public RayExecutor {
       if (lane.pending) last = &lane;
     if (!last) return;
     wait(d, last->outcomes_read);
-    rerun_outgrown(d, d.lanes[0]);
+    rerun_outgrown(d, d.lanes[kFullLane]);
     cl::Event rest;
     bool more = false;
     for (Lane& lane : d.lanes)
@@ -1171,7 +1174,7 @@ class OpenClExecutor final : public RayExecutor {
   // ones: the step keeps job order, and no copy waits for the slowest
   // device).
   void run(RayBatch& batch) {
-    const size_t which = batch.iterative ? 1 : 0;
+    const size_t which = batch.iterative ? kWalkedLane : kFullLane;
     assign(which, batch.jobs, config_);
     // An injected mid-step fault strikes after the batch's first kernels
     // were enqueued: the second batch with work, or the first walked one
@@ -1179,7 +1182,7 @@ class OpenClExecutor final : public RayExecutor {
     bool work = false, full_work = false;
     for (const Device& d : devices_) {
       work = work || d.lanes[which].items > 0;
-      full_work = full_work || (full_ && d.lanes[0].items > 0);
+      full_work = full_work || (full_ && d.lanes[kFullLane].items > 0);
     }
     batches_ += work;
     const bool inject_mid_step = (fault_ == OpenClFault::mid_step && batches_ == 2) ||
@@ -1191,8 +1194,8 @@ class OpenClExecutor final : public RayExecutor {
       if (!batch.iterative) return;
       finish(d);
       collect(d);
-      if (full_) deliver(i, d.lanes[0], *full_);
-      deliver(i, d.lanes[1], batch);
+      if (full_) deliver(i, d.lanes[kFullLane], *full_);
+      deliver(i, d.lanes[kWalkedLane], batch);
     };
     if (devices_.size() == 1) {
       run_device(0);
@@ -1207,8 +1210,8 @@ class OpenClExecutor final : public RayExecutor {
     if (!batch.iterative) return;
     // The devices' counters, summed on this thread.
     for (const Device& d : devices_) {
-      if (full_) add_counted(d.lanes[0], *full_);
-      add_counted(d.lanes[1], batch);
+      if (full_) add_counted(d.lanes[kFullLane], *full_);
+      add_counted(d.lanes[kWalkedLane], batch);
     }
     full_ = nullptr;
   }
