@@ -1252,9 +1252,11 @@ class OpenClExecutor final : public RayExecutor {
       const rtcd_job_summary& s = lane.host_summaries[l];
       const int target_kind = data_.table[dj.target].kind;
       const auto edge_kind = rtcd_uchar(rtcd_item_kind(target_kind, &dj.params, dj.params.first_edge));
-      out.resize(s.kept);
+      // Built one by one, not by resize: that would write every outcome
+      // twice, zeros first (the vector keeps its capacity from step to step).
+      out.reserve(s.kept);
       for (uint32_t k = 0; k < s.kept; ++k) {
-        RayOutcome& o = out[k];
+        RayOutcome o;  // rtcd_outcome_init sets every field
         if (runtime_->place_on_device) {
           rtcd_outcome_init(&o, kPlaceholder);
         } else {
@@ -1265,6 +1267,7 @@ class OpenClExecutor final : public RayExecutor {
         }
         o.kind = RTCD_RAY_WATCHED;
         o.edge = k < s.kept_origins ? rtcd_uchar(RTCD_ITEM_ORIGIN) : edge_kind;
+        out.push_back(o);
       }
       for (; report != reports_end && report->job == l; ++report) {
         if (report->place >= s.kept)
