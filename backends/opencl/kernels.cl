@@ -271,7 +271,6 @@ RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jo
                                  __global const rtcd_tracked* tracked, rtcd_candidate* c) {
   rtcd_uint j = item_jobs[i];
   rtcd_device_job job = jobs[j];
-  rtcd_frame frame;
   rtcd_uint s;
   c->job = j;
   if (job.params.iterative) {
@@ -285,10 +284,9 @@ RTCD_INLINE int rtcd_select_item(rtcd_uint i, __global const rtcd_device_job* jo
     c->entry = -1;
   }
   s = shapes[job.source].first_source + c->vertex;
-  frame = frames[j];
   c->origin = rtcd_v3(0.0f, 0.0f, 0.0f);
   c->direction = c->origin;
-  return rtcd_place_item(&frame, &job.params, c->vertex, origins[s], directions[s], &c->origin, &c->direction);
+  return rtcd_place_item(frames + j, &job.params, c->vertex, origins[s], directions[s], &c->origin, &c->direction);
 }
 
 /* Compacted layout, each item: placed and flagged, for rtcd_count and

@@ -107,18 +107,18 @@ typedef struct {
   int divide;
 } rtcd_slab_ray;
 
+RTCD_INLINE int rtcd_slab_divides(float d, float inverse) { return d == 0.0f || RTCD_FABS(inverse) > 3.0e38f; }
+
+/* The inverses as scalars, not through an array: read back whole, an
+ * array's separate stores would stall the first box test. */
 RTCD_INLINE rtcd_slab_ray rtcd_make_slab_ray(const rtcd_ray* ray) {
   rtcd_slab_ray s;
-  float inv[3];
-  int k;
+  const rtcd_vec3 d = ray->direction;
+  const float x = d.x == 0.0f ? 0.0f : 1.0f / d.x, y = d.y == 0.0f ? 0.0f : 1.0f / d.y,
+              z = d.z == 0.0f ? 0.0f : 1.0f / d.z;
   s.ray = ray;
-  s.divide = 0;
-  for (k = 0; k < 3; ++k) {
-    float d = rtcd_component(ray->direction, k);
-    inv[k] = d == 0.0f ? 0.0f : 1.0f / d;
-    if (d == 0.0f || RTCD_FABS(inv[k]) > 3.0e38f) s.divide = 1;
-  }
-  s.inverse = rtcd_v3(inv[0], inv[1], inv[2]);
+  s.inverse = rtcd_v3(x, y, z);
+  s.divide = rtcd_slab_divides(d.x, x) | rtcd_slab_divides(d.y, y) | rtcd_slab_divides(d.z, z);
   return s;
 }
 

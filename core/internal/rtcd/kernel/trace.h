@@ -250,9 +250,7 @@ RTCD_INLINE int rtcd_edge_point_inside(const rtcd_tracer* tracer, const rtcd_can
  * nearest triangle under the tie rules of tracer.h. */
 RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_params* p, const rtcd_candidate* c,
                                  rtcd_outcome* o) {
-  rtcd_vec3 end = rtcd_add(c->origin, c->direction);
-  rtcd_ray forward = rtcd_make_ray(c->origin, c->direction);
-  rtcd_ray backward = rtcd_make_ray(end, rtcd_neg(c->direction));
+  rtcd_ray forward, backward; /* made only for the tests that trace them */
   rtcd_hit first, last, back;
   rtcd_vec3 point;
   float a, b, m, length, tolerance;
@@ -280,12 +278,14 @@ RTCD_INLINE void rtcd_edge_trace(const rtcd_tracer* tracer, const rtcd_trace_par
       return;
     }
   }
+  forward = rtcd_make_ray(c->origin, c->direction);
   first = rtcd_tracer_first_hit(tracer, &forward, 1.0f);
   o->edge_rays = 1;
   if (first.triangle < 0 || rtcd_tracer_leaves(tracer, first.triangle, c->direction)) {
     rtcd_watch_edge(p, c, o);
     return;
   }
+  backward = rtcd_make_ray(rtcd_add(c->origin, c->direction), rtcd_neg(c->direction));
   last = rtcd_tracer_first_hit(tracer, &backward, 1.0f);
   o->edge_rays = 2;
   if (last.triangle < 0 || rtcd_tracer_leaves(tracer, last.triangle, rtcd_neg(c->direction))) {

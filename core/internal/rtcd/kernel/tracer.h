@@ -121,8 +121,8 @@ RTCD_INLINE int rtcd_nearer(float best_d2, rtcd_int best, float d2, rtcd_int tri
  * (rotation, then translation), tested against the candidate box in double,
  * then rounded to float with its direction. 0: not a candidate (no
  * direction, or outside the box). */
-RTCD_INLINE int rtcd_place_ray(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 direction, rtcd_vec3* origin_out,
-                               rtcd_vec3* direction_out) {
+RTCD_INLINE int rtcd_place_ray(RTCD_GLOBAL const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 direction,
+                               rtcd_vec3* origin_out, rtcd_vec3* direction_out) {
   double ox = origin.x, oy = origin.y, oz = origin.z;
   double dx = direction.x, dy = direction.y, dz = direction.z;
   double px, py, pz;
@@ -143,8 +143,8 @@ RTCD_INLINE int rtcd_place_ray(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 
  * target's frame in double, like rtcd_place_ray; a candidate when the
  * segment meets the candidate box (slabs in double). 0: not a candidate
  * (zero length, or the segment misses the box). */
-RTCD_INLINE int rtcd_place_edge(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 along, rtcd_vec3* origin_out,
-                                rtcd_vec3* along_out) {
+RTCD_INLINE int rtcd_place_edge(RTCD_GLOBAL const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3 along,
+                                rtcd_vec3* origin_out, rtcd_vec3* along_out) {
   double p[3], d[3];
   double s0 = 0.0, s1 = 1.0;
   int k, across = 0;
@@ -183,9 +183,11 @@ RTCD_INLINE int rtcd_place_edge(const rtcd_frame* f, rtcd_vec3 origin, rtcd_vec3
 /* A source item placed as what it is: a ray origin (rtcd_place_ray), an
  * edge (rtcd_place_edge), or a sphere's centre (its deepest-point item,
  * always a candidate of a job with candidates); the last two only when the
- * job tests them. */
-RTCD_INLINE int rtcd_place_item(const rtcd_frame* f, const rtcd_trace_params* p, rtcd_uint item, rtcd_vec3 origin,
-                                rtcd_vec3 direction, rtcd_vec3* origin_out, rtcd_vec3* direction_out) {
+ * job tests them. Devices read the frame where it lies: a private copy of
+ * its 168 bytes was read back before its stores had settled. */
+RTCD_INLINE int rtcd_place_item(RTCD_GLOBAL const rtcd_frame* f, const rtcd_trace_params* p, rtcd_uint item,
+                                rtcd_vec3 origin, rtcd_vec3 direction, rtcd_vec3* origin_out,
+                                rtcd_vec3* direction_out) {
   if (item < p->first_edge) return rtcd_place_ray(f, origin, direction, origin_out, direction_out);
   if (!p->edges) return 0;
   if (p->source_radius > 0.0f) {
