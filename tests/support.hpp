@@ -1,7 +1,9 @@
 // Helpers shared by the test suites.
 #pragma once
 
+#include <algorithm>
 #include <cctype>
+#include <cmath>
 #include <memory>
 #include <set>
 #include <tuple>
@@ -9,6 +11,7 @@
 #include <Eigen/Geometry>
 
 #include "rtcd/backend.hpp"
+#include "rtcd/mesh_gen.hpp"
 #include "rtcd/narrow_phase.hpp"
 
 namespace rtcd::test {
@@ -49,6 +52,27 @@ struct PairRig {
     return narrow->detect(std::span(&pair, 1));
   }
 };
+
+// A cube of half 1 whose +x face is a fan around `centre` (in that face's
+// plane): moving the centre onto an edge makes a zero-area triangle, near
+// it a sliver.
+inline Mesh cube_with_fan(const Eigen::Vector3f& centre, MeshOptions options) {
+  const Mesh box = gen::box({1, 1, 1});
+  std::vector<Eigen::Vector3f> p(box.positions().begin(), box.positions().end());
+  std::vector<Mesh::Triangle> t;
+  for (size_t i = 0; i < box.triangle_count(); ++i)
+    if (box.triangle_normals()[i].x() < 0.5f) t.push_back(box.triangles()[i]);
+  std::vector<uint32_t> face;  // +x corners, counter-clockwise seen from +x
+  for (uint32_t v = 0; v < p.size(); ++v)
+    if (p[v].x() > 0) face.push_back(v);
+  std::sort(face.begin(), face.end(), [&](uint32_t a, uint32_t b) {
+    return std::atan2(p[a].z(), p[a].y()) < std::atan2(p[b].z(), p[b].y());
+  });
+  const uint32_t c = uint32_t(p.size());
+  p.push_back(centre);
+  for (size_t k = 0; k < 4; ++k) t.push_back({c, face[k], face[(k + 1) % 4]});
+  return Mesh(p, t, options);
+}
 
 // (source, vertex) of every penetrating ray.
 inline std::set<std::pair<int, uint32_t>> penetrating(const StepResult& r) {

@@ -61,6 +61,13 @@ typedef int4 rtcd_intw;
 #define RTCD_BVH_LEAF_FIRST(code) ((rtcd_uint)(-2 - (code)) / 4u)
 #define RTCD_BVH_LEAF_COUNT(code) ((rtcd_uint)(-2 - (code)) % 4u)
 
+#ifdef __OPENCL_C_VERSION__
+/* Which of a wide node's children exist, a lane each. */
+RTCD_ALWAYS_INLINE rtcd_intw rtcd_children_wide(RTCD_GLOBAL const rtcd_bvh_wide_node* node) {
+  return RTCD_VLOADW(0, node->child) != (rtcd_intw)(RTCD_BVH_NO_CHILD);
+}
+#endif
+
 /* Relative margin on box distances: a few hundred float ulps, far more than
  * the box tests round. */
 #define RTCD_BVH_MARGIN 1.0e-5f
@@ -173,16 +180,17 @@ RTCD_ALWAYS_INLINE void rtcd_slab_entries_wide(const rtcd_slab_ray* s, RTCD_GLOB
   int k;
 #ifdef __OPENCL_C_VERSION__
   if (!s->divide) {
+    const rtcd_floatw zero = (rtcd_floatw)(0.0f);
     rtcd_vec3 o = s->ray->origin, inv = s->inverse;
     rtcd_floatw x0 = (RTCD_VLOADW(0, node->lo_x) - o.x) * inv.x, x1 = (RTCD_VLOADW(0, node->hi_x) - o.x) * inv.x;
     rtcd_floatw y0 = (RTCD_VLOADW(0, node->lo_y) - o.y) * inv.y, y1 = (RTCD_VLOADW(0, node->hi_y) - o.y) * inv.y;
     rtcd_floatw z0 = (RTCD_VLOADW(0, node->lo_z) - o.z) * inv.z, z1 = (RTCD_VLOADW(0, node->hi_z) - o.z) * inv.z;
-    rtcd_floatw a = RTCD_MAX(RTCD_MAX(RTCD_MIN(x0, x1), RTCD_MIN(y0, y1)), RTCD_MAX(RTCD_MIN(z0, z1), (rtcd_floatw)(0.0f)));
+    rtcd_floatw a = RTCD_MAX(RTCD_MAX(RTCD_MIN(x0, x1), RTCD_MIN(y0, y1)), RTCD_MAX(RTCD_MIN(z0, z1), zero));
     rtcd_floatw b = RTCD_MIN(RTCD_MAX(x0, x1), RTCD_MIN(RTCD_MAX(y0, y1), RTCD_MAX(z0, z1)));
     a -= a * RTCD_BVH_MARGIN;
     b += fabs(b) * RTCD_BVH_MARGIN;
     b = RTCD_MIN(b, (rtcd_floatw)(t_max));
-    RTCD_VSTOREW(select((rtcd_floatw)(-1.0f), a, (a <= b) & (RTCD_VLOADW(0, node->child) != (rtcd_intw)(RTCD_BVH_NO_CHILD))), 0, entry);
+    RTCD_VSTOREW(select((rtcd_floatw)(-1.0f), a, (a <= b) & rtcd_children_wide(node)), 0, entry);
     return;
   }
 #endif
@@ -203,12 +211,13 @@ RTCD_INLINE int rtcd_bvh_box_near(float d2, float best_d2) { return d2 * (1.0f -
 RTCD_ALWAYS_INLINE void rtcd_box_near_wide(rtcd_vec3 p, RTCD_GLOBAL const rtcd_bvh_wide_node* node, float best_d2,
                                        float* d2) {
 #ifdef __OPENCL_C_VERSION__
-  rtcd_floatw dx = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_x) - p.x, p.x - RTCD_VLOADW(0, node->hi_x)), (rtcd_floatw)(0.0f));
-  rtcd_floatw dy = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_y) - p.y, p.y - RTCD_VLOADW(0, node->hi_y)), (rtcd_floatw)(0.0f));
-  rtcd_floatw dz = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_z) - p.z, p.z - RTCD_VLOADW(0, node->hi_z)), (rtcd_floatw)(0.0f));
+  const rtcd_floatw zero = (rtcd_floatw)(0.0f);
+  rtcd_floatw dx = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_x) - p.x, p.x - RTCD_VLOADW(0, node->hi_x)), zero);
+  rtcd_floatw dy = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_y) - p.y, p.y - RTCD_VLOADW(0, node->hi_y)), zero);
+  rtcd_floatw dz = RTCD_MAX(RTCD_MAX(RTCD_VLOADW(0, node->lo_z) - p.z, p.z - RTCD_VLOADW(0, node->hi_z)), zero);
   rtcd_floatw d = dx * dx + dy * dy + dz * dz;
   RTCD_VSTOREW(select((rtcd_floatw)(-1.0f), d,
-                 (d * (1.0f - RTCD_BVH_MARGIN) <= best_d2) & (RTCD_VLOADW(0, node->child) != (rtcd_intw)(RTCD_BVH_NO_CHILD))),
+                      (d * (1.0f - RTCD_BVH_MARGIN) <= best_d2) & rtcd_children_wide(node)),
           0, d2);
 #else
   int k;
@@ -248,7 +257,8 @@ RTCD_ALWAYS_INLINE void rtcd_bvh_leaf_first_hit(const rtcd_ray* ray, rtcd_uint f
 
 /* The binary nodes [n, end) of a subtree in depth-first order, no stack. */
 RTCD_INLINE void rtcd_bvh_range_first_hit(const rtcd_slab_ray* slabs, RTCD_GLOBAL const rtcd_bvh_node* nodes,
-                                          rtcd_uint n, rtcd_uint end, RTCD_GLOBAL const rtcd_bvh_primitive* primitives, rtcd_hit* best) {
+                                          rtcd_uint n, rtcd_uint end, RTCD_GLOBAL const rtcd_bvh_primitive* primitives,
+                                          rtcd_hit* best) {
   while (n < end) {
     rtcd_bvh_node node = nodes[n];
     if (rtcd_slab_entry(slabs, node.lo, node.hi, best->t) < 0.0f) {
