@@ -44,6 +44,9 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
                        __global const rtcd_int* neighbors, __global const rtcd_uchar* zero_area,
                        __global const rtcd_bvh_node* nodes, __global const rtcd_bvh_wide_node* wide,
                        __global const rtcd_bvh_primitive* primitives,
+#ifdef RTCD_HAS_DOUBLE
+                       __global const rtcd_frame* frames, /* read in place, as the devices read a job's frame */
+#endif
                        __global float* out) {
   rtcd_ray ray = rtcd_make_ray(rtcd_v3(0.0f, 0.0f, 0.0f), rtcd_v3(0.0f, 0.0f, 1.0f));
   rtcd_walk_result w = rtcd_walk(&ray, positions, triangles, neighbors, zero_area, 0, 16u);
@@ -88,14 +91,8 @@ __kernel void exercise(__global const rtcd_vec3* positions, __global const rtcd_
   rtcd_edge_volume_trace(RTCD_TARGET_SPHERE, 1.0f, ray.origin, &p, &c, &o);
   rtcd_sphere_trace(RTCD_TARGET_BOX, 1.0f, ray.origin, &p, &c, &o);
 #ifdef RTCD_HAS_DOUBLE
-  {
-    rtcd_frame f;
-    int k;
-    for (k = 0; k < 9; ++k) f.rotation[k] = k % 4 == 0 ? 1.0 : 0.0;
-    for (k = 0; k < 3; ++k) f.translation[k] = f.lo[k] = f.hi[k] = 0.0;
-    kind += rtcd_place_ray(&f, ray.origin, ray.direction, &c.origin, &c.direction);
-    kind += rtcd_place_item(&f, &p, 1u, ray.origin, ray.direction, &c.origin, &c.direction);
-  }
+  kind += rtcd_place_ray(frames, ray.origin, ray.direction, &c.origin, &c.direction);
+  kind += rtcd_place_item(frames, &p, 1u, ray.origin, ray.direction, &c.origin, &c.direction);
 #endif
   out[get_global_id(0)] = w.t + s.t + b.t + d2 + (float)kind + h.t + (float)near + o.t;
 }
